@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages probecomp builds against, only those that are missing.
+# Safe to run repeatedly: when everything is present it does nothing and needs no network.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev                 # linear algebra
+  libocct-foundation-dev        # OpenCASCADE: TKernel, TKMath
+  libocct-modeling-data-dev     # OpenCASCADE: Geom_BSplineSurface, BRep
+  libocct-modeling-algorithms-dev # OpenCASCADE: GeomAPI_ProjectPointOnSurf (reference)
+  libocct-data-exchange-dev     # OpenCASCADE: STEP and IGES readers and writers
+  libnanoflann-dev              # k-d tree for nearest seeds
+  libcli11-dev                  # command line
+  libtbb-dev                    # oneTBB threads
+  libgtest-dev                  # GoogleTest
+  libbenchmark-dev              # Google Benchmark
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+
+echo "setup: installing ${missing[*]}" >&2
+if [ "$(id -u)" -ne 0 ]; then
+  SUDO=sudo
+else
+  SUDO=
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -1,0 +1,220 @@
+#include "nurbs/surface.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "nurbs/basis.hpp"
+#include "nurbs/knot_insertion.hpp"
+
+namespace probecomp::nurbs {
+
+Surface::Surface(KnotVector U, KnotVector V, const std::vector<Point3>& P, const std::vector<double>& w)
+    : U_(std::move(U)), V_(std::move(V)) {
+  if (!w.empty() && w.size() != P.size()) throw InvalidGeometry("surface weights and control points differ in number");
+  Pw_.resize(P.size());
+  for (std::size_t k = 0; k < P.size(); ++k) {
+    const double wk = w.empty() ? 1.0 : w[k];
+    Pw_[k] << wk * P[k], wk;
+  }
+  validate();
+}
+
+Surface::Surface(KnotVector U, KnotVector V, std::vector<HomogeneousPoint> Pw)
+    : U_(std::move(U)), V_(std::move(V)), Pw_(std::move(Pw)) {
+  validate();
+}
+
+void Surface::validate() const {
+  const auto expected = static_cast<std::size_t>(num_u()) * static_cast<std::size_t>(num_v());
+  if (Pw_.size() != expected) {
+    throw InvalidGeometry("surface has " + std::to_string(Pw_.size()) + " control points but its knot vectors need " +
+                          std::to_string(num_u()) + " x " + std::to_string(num_v()));
+  }
+  for (std::size_t k = 0; k < Pw_.size(); ++k) {
+    if (!(Pw_[k].w() > 0.0) || !Pw_[k].allFinite()) {
+      throw InvalidGeometry("control point " + std::to_string(k) + " has a non-positive or non-finite weight");
+    }
+  }
+}
+
+Point3 Surface::control_point(int i, int j) const {
+  const auto& q = homogeneous(i, j);
+  return q.head<3>() / q.w();
+}
+
+bool Surface::is_rational() const {
+  return std::any_of(Pw_.begin(), Pw_.end(), [&](const HomogeneousPoint& q) { return q.w() != Pw_[0].w(); });
+}
+
+namespace {
+
+// Derivatives A[k][l] = ∂^{k+l} Sw / ∂u^k ∂v^l of the homogeneous surface for k + l <= D (A3.6).
+// Summing each row of the net over v first and then the rows over u costs (p+1)(q+1)(D+1) + (p+1)·#(k,l)
+// four-vector operations instead of (p+1)(q+1)·#(k,l).
+template <int D>
+void homogeneous_derivatives(const Surface& s, double u, double v, HomogeneousPoint (&A)[D + 1][D + 1]) {
+  const int p = s.p();
+  const int q = s.q();
+  const Domain dom = s.domain();
+  u = std::clamp(u, dom.u0, dom.u1);
+  v = std::clamp(v, dom.v0, dom.v1);
+  const int su = s.U().find_span(u);
+  const int sv = s.V().find_span(v);
+  double Nu[(D + 1) * (kMaxDegree + 1)];
+  double Nv[(D + 1) * (kMaxDegree + 1)];
+  if constexpr (D == 0) {
+    basis_functions(s.U(), su, u, Nu);
+    basis_functions(s.V(), sv, v, Nv);
+  } else {
+    basis_function_derivatives(s.U(), su, u, D, Nu);
+    basis_function_derivatives(s.V(), sv, v, D, Nv);
+  }
+  for (int k = 0; k <= D; ++k)
+    for (int l = 0; l + k <= D; ++l) A[k][l].setZero();
+
+  const int stride = s.num_v();
+  const HomogeneousPoint* net = s.homogeneous().data();
+  for (int i = 0; i <= p; ++i) {
+    const HomogeneousPoint* row = net + (su - p + i) * stride + (sv - q);
+    HomogeneousPoint T[D + 1];
+    for (int l = 0; l <= D; ++l) T[l].setZero();
+    for (int j = 0; j <= q; ++j) {
+      for (int l = 0; l <= D; ++l) T[l] += Nv[l * (q + 1) + j] * row[j];
+    }
+    for (int k = 0; k <= D; ++k) {
+      const double nk = Nu[k * (p + 1) + i];
+      for (int l = 0; l + k <= D; ++l) A[k][l] += nk * T[l];
+    }
+  }
+}
+
+}  // namespace
+
+Point3 evaluate(const Surface& s, double u, double v) {
+  HomogeneousPoint A[1][1];
+  homogeneous_derivatives<0>(s, u, v, A);
+  return A[0][0].head<3>() / A[0][0].w();
+}
+
+SurfaceD1 derivatives_d1(const Surface& s, double u, double v) {
+  HomogeneousPoint A[2][2];
+  homogeneous_derivatives<1>(s, u, v, A);
+  const double w = A[0][0].w();
+  SurfaceD1 r;
+  r.S = A[0][0].head<3>() / w;
+  r.Su = (A[1][0].head<3>() - A[1][0].w() * r.S) / w;
+  r.Sv = (A[0][1].head<3>() - A[0][1].w() * r.S) / w;
+  return r;
+}
+
+SurfaceD2 derivatives_d2(const Surface& s, double u, double v) {
+  HomogeneousPoint A[3][3];
+  homogeneous_derivatives<2>(s, u, v, A);
+  // A4.4 written out for k + l <= 2, with A = homogeneous point part and w its weight part:
+  //   S^{kl} = (A^{kl} - Σ_{j=1..l} C(l,j) w^{0j} S^{k,l-j} - Σ_{i=1..k} C(k,i) w^{i0} S^{k-i,l}
+  //             - Σ_{i=1..k} Σ_{j=1..l} C(k,i) C(l,j) w^{ij} S^{k-i,l-j}) / w.
+  // The mixed term needs all three sums (tinynurbs drops one); tests check it by central differences.
+  const double w = A[0][0].w();
+  SurfaceD2 r;
+  r.S = A[0][0].head<3>() / w;
+  r.Su = (A[1][0].head<3>() - A[1][0].w() * r.S) / w;
+  r.Sv = (A[0][1].head<3>() - A[0][1].w() * r.S) / w;
+  r.Suu = (A[2][0].head<3>() - 2.0 * A[1][0].w() * r.Su - A[2][0].w() * r.S) / w;
+  r.Suv = (A[1][1].head<3>() - A[0][1].w() * r.Su - A[1][0].w() * r.Sv - A[1][1].w() * r.S) / w;
+  r.Svv = (A[0][2].head<3>() - 2.0 * A[0][1].w() * r.Sv - A[0][2].w() * r.S) / w;
+  return r;
+}
+
+UnitNormal unit_normal(const Surface& s, double u, double v) {
+  // |S_u × S_v| below this fraction of |S_u||S_v| (sine of the angle between the tangents) counts as
+  // vanishing: at 1e-10 the normal's direction is still good to about 1e-6 rad from rounding alone.
+  constexpr double kParallelTangents = 1e-10;
+  const SurfaceD1 d = derivatives_d1(s, u, v);
+  Vector3 n = d.Su.cross(d.Sv);
+  const double scale = d.Su.norm() * d.Sv.norm();
+  if (n.norm() > kParallelTangents * scale && n.norm() > 0.0) return {UnitNormal::Status::OK, n.normalized()};
+
+  // At a collapsed edge one tangent vanishes; the normal is its limit from inside the domain. If S_u = 0 along
+  // the edge v = v0, then S_u(u, v0 + δ) ≈ δ·S_uv and the limit of S_u × S_v is the direction of δ·S_uv × S_v
+  // (L'Hôpital); likewise S_v = 0 along u = u0 gives δ·S_u × S_uv.
+  const Domain dom = s.domain();
+  const double du_dir = (u - dom.u0 < dom.u1 - u) ? 1.0 : -1.0;
+  const double dv_dir = (v - dom.v0 < dom.v1 - v) ? 1.0 : -1.0;
+  const SurfaceD2 d2 = derivatives_d2(s, u, v);
+  const double su = d2.Su.norm();
+  const double sv = d2.Sv.norm();
+  Vector3 limit = Vector3::Zero();
+  if (su < sv) {
+    limit = dv_dir * d2.Suv.cross(d2.Sv);
+    if (limit.norm() <= kParallelTangents * d2.Suv.norm() * sv) limit.setZero();
+  } else if (sv < su) {
+    limit = du_dir * d2.Su.cross(d2.Suv);
+    if (limit.norm() <= kParallelTangents * su * d2.Suv.norm()) limit.setZero();
+  }
+  if (limit.norm() > 0.0) return {UnitNormal::Status::FromNeighbourhood, limit.normalized()};
+
+  // Both tangents vanish (an apex) or the limit above degenerates too: step inwards, growing the step until
+  // the tangents separate.
+  for (double h = 1e-8; h <= 1e-3; h *= 10.0) {
+    const double uu = u + du_dir * h * (dom.u1 - dom.u0);
+    const double vv = v + dv_dir * h * (dom.v1 - dom.v0);
+    const SurfaceD1 e = derivatives_d1(s, uu, vv);
+    n = e.Su.cross(e.Sv);
+    if (n.norm() > kParallelTangents * e.Su.norm() * e.Sv.norm() && n.norm() > 0.0) {
+      return {UnitNormal::Status::FromNeighbourhood, n.normalized()};
+    }
+  }
+  return {UnitNormal::Status::Degenerate, Vector3::Zero()};
+}
+
+BoundingBox bounding_box(const Surface& s) {
+  BoundingBox box;
+  for (const auto& q : s.homogeneous()) box.extend(q.head<3>() / q.w());
+  return box;
+}
+
+namespace {
+// Each column j (fixed v index) of the net is a curve in u; A5.3 refines the surface by refining each column.
+template <class CurveOperation>
+Surface apply_to_columns(const Surface& s, CurveOperation op) {
+  const int nu = s.num_u();
+  const int nv = s.num_v();
+  std::vector<HomogeneousPoint> column(nu);
+  std::vector<HomogeneousPoint> Qw;
+  KnotVector UQ;
+  for (int j = 0; j < nv; ++j) {
+    for (int i = 0; i < nu; ++i) column[i] = s.homogeneous(i, j);
+    auto [U, Q] = op(s.U(), column);
+    if (j == 0) {
+      UQ = std::move(U);
+      Qw.resize(static_cast<std::size_t>(UQ.num_basis()) * nv);
+    }
+    for (int i = 0; i < UQ.num_basis(); ++i) Qw[i * nv + j] = Q[i];
+  }
+  return Surface(std::move(UQ), s.V(), std::move(Qw));
+}
+}  // namespace
+
+Surface insert_knot_u(const Surface& s, double u, int r) {
+  return apply_to_columns(s, [&](const KnotVector& U, const auto& P) { return insert_knot_homogeneous(U, P, u, r); });
+}
+
+Surface refine_knots_u(const Surface& s, const std::vector<double>& X) {
+  return apply_to_columns(s, [&](const KnotVector& U, const auto& P) { return refine_knots_homogeneous(U, P, X); });
+}
+
+Surface refine_knots_v(const Surface& s, const std::vector<double>& X) { return transposed(refine_knots_u(transposed(s), X)); }
+
+Surface transposed(const Surface& s) {
+  const int nu = s.num_u();
+  const int nv = s.num_v();
+  std::vector<HomogeneousPoint> Qw(s.homogeneous().size());
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) Qw[j * nu + i] = s.homogeneous(i, j);
+  return Surface(s.V(), s.U(), std::move(Qw));
+}
+
+Surface insert_knot_v(const Surface& s, double v, int r) { return transposed(insert_knot_u(transposed(s), v, r)); }
+
+}  // namespace probecomp::nurbs

@@ -1,0 +1,79 @@
+#include "nurbs/basis.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace probecomp::nurbs {
+namespace {
+
+// Cox–de Boor recursion (The NURBS Book, eq. 2.5), straight from the definition: an independent reference.
+double cox_de_boor(const KnotVector& U, int i, int p, double u) {
+  if (p == 0) return (U[i] <= u && u < U[i + 1]) ? 1.0 : 0.0;  // u < back() in these tests
+  double a = 0.0, b = 0.0;
+  if (U[i + p] != U[i]) a = (u - U[i]) / (U[i + p] - U[i]) * cox_de_boor(U, i, p - 1, u);
+  if (U[i + p + 1] != U[i + 1]) b = (U[i + p + 1] - u) / (U[i + p + 1] - U[i + 1]) * cox_de_boor(U, i + 1, p - 1, u);
+  return a + b;
+}
+
+TEST(Basis, MatchesCoxDeBoorAndIsAPartitionOfUnity) {
+  const KnotVector U({0, 0, 0, 0, 0.1, 0.35, 0.35, 0.6, 1, 1, 1, 1}, 3);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> dist(0.0, 1.0);
+  for (int t = 0; t < 500; ++t) {
+    const double u = dist(rng);
+    const int span = U.find_span(u);
+    double N[kMaxDegree + 1];
+    basis_functions(U, span, u, N);
+    double sum = 0.0;
+    for (int j = 0; j <= 3; ++j) {
+      EXPECT_NEAR(N[j], cox_de_boor(U, span - 3 + j, 3, u), 1e-14);
+      EXPECT_GE(N[j], 0.0);
+      sum += N[j];
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-15);
+  }
+}
+
+TEST(Basis, DerivativesMatchCentralDifferencesAndTheValues) {
+  const KnotVector U({0, 0, 0, 0, 0.2, 0.5, 0.7, 1, 1, 1, 1}, 3);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> dist(0.02, 0.98);
+  const double h = 1e-6;
+  for (int t = 0; t < 300; ++t) {
+    double u = dist(rng);
+    // Keep the difference stencil inside one span, where the functions are polynomials.
+    const int span = U.find_span(u);
+    u = std::clamp(u, U[span] + 2 * h, U[span + 1] - 2 * h);
+    double ders[4 * (kMaxDegree + 1)];
+    basis_function_derivatives(U, span, u, 3, ders);
+    double N0[kMaxDegree + 1], Np[kMaxDegree + 1], Nm[kMaxDegree + 1];
+    basis_functions(U, span, u, N0);
+    basis_functions(U, span, u + h, Np);
+    basis_functions(U, span, u - h, Nm);
+    double d1p[4 * (kMaxDegree + 1)], d1m[4 * (kMaxDegree + 1)];
+    basis_function_derivatives(U, span, u + h, 3, d1p);
+    basis_function_derivatives(U, span, u - h, 3, d1m);
+    double sum1 = 0.0;
+    for (int j = 0; j <= 3; ++j) {
+      EXPECT_NEAR(ders[j], N0[j], 1e-15);
+      EXPECT_NEAR(ders[4 + j], (Np[j] - Nm[j]) / (2 * h), 1e-6);
+      EXPECT_NEAR(ders[8 + j], (d1p[4 + j] - d1m[4 + j]) / (2 * h), 1e-5);
+      EXPECT_NEAR(ders[12 + j], (d1p[8 + j] - d1m[8 + j]) / (2 * h), 1e-4);
+      sum1 += ders[4 + j];
+    }
+    EXPECT_NEAR(sum1, 0.0, 1e-12);  // derivative of a partition of unity
+  }
+}
+
+TEST(Basis, OrdersAboveTheDegreeAreZero) {
+  const KnotVector U = KnotVector::uniform(1, 3);
+  double ders[3 * (kMaxDegree + 1)];
+  basis_function_derivatives(U, U.find_span(0.4), 0.4, 2, ders);
+  EXPECT_EQ(ders[4], 0.0);
+  EXPECT_EQ(ders[5], 0.0);
+  EXPECT_DOUBLE_EQ(ders[2] + ders[3], 0.0);  // first derivatives of a linear pair cancel
+}
+
+}  // namespace
+}  // namespace probecomp::nurbs

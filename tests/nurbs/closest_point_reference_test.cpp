@@ -1,0 +1,114 @@
+// Closest points against independent references: OpenCASCADE's GeomAPI_ProjectPointOnSurf on random rational
+// surfaces, and a dense brute-force search on the two-turn spiral sheet.
+
+#include <GeomAPI_ProjectPointOnSurf.hxx>
+#include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
+
+#include "nurbs/closest_point.hpp"
+#include "occt/convert.hpp"
+#include "support/test_surfaces.hpp"
+
+namespace probecomp::nurbs {
+namespace {
+
+// Ours may not be farther than the reference by more than this (mm).
+constexpr double kReferenceTolerance = 1e-9;
+
+TEST(ClosestPointVsOpenCascade, NeverFartherOn10000RandomPoints) {
+  const testing::RandomSurfaceSpec specs[] = {
+      {.p = 3, .q = 3, .nu = 8, .nv = 7},
+      {.p = 3, .q = 3, .nu = 20, .nv = 20},
+      {.p = 2, .q = 3, .nu = 6, .nv = 9, .height = 30.0},
+      {.p = 4, .q = 2, .nu = 9, .nv = 6, .weight_min = 0.3, .weight_max = 3.0},
+  };
+  int total = 0, ours_better = 0, occt_found_none = 0;
+  double worst_excess = -1.0;
+  std::uint64_t seed = 300;
+  for (const auto& spec : specs) {
+    const Surface s = testing::random_rational_surface(seed++, spec);
+    const ClosestPointSolver solver(s);
+    const Handle(Geom_BSplineSurface) ref = occt::to_occt(s);
+    const auto points = testing::random_points_near(s, 2500, 5.0, seed++);
+    const auto ours = solver.closest_points(points);
+    GeomAPI_ProjectPointOnSurf projector;
+    projector.Init(ref, 0.0, 1.0, 0.0, 1.0);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      ++total;
+      ASSERT_TRUE(ours[i].ok()) << to_string(ours[i].status) << " at point " << i;
+      EXPECT_NEAR((evaluate(s, ours[i].u, ours[i].v) - points[i]).norm(), ours[i].distance, 1e-12);
+      projector.Perform(gp_Pnt(points[i].x(), points[i].y(), points[i].z()));
+      if (!projector.IsDone() || projector.NbPoints() == 0) {
+        ++occt_found_none;
+        continue;
+      }
+      const double theirs = projector.LowerDistance();
+      const double excess = ours[i].distance - theirs;
+      worst_excess = std::max(worst_excess, excess);
+      EXPECT_LE(excess, kReferenceTolerance) << "point " << i << " ours " << ours[i].distance << " occt " << theirs;
+      ours_better += excess < -1e-6;
+    }
+  }
+  EXPECT_EQ(total, 10000);
+  EXPECT_LT(occt_found_none, total / 100);
+  RecordProperty("worst_excess_mm", std::to_string(worst_excess));
+  std::cout << "closest point vs OpenCASCADE: " << total << " points, worst (ours - occt) = " << worst_excess
+            << " mm, ours closer by > 1 um on " << ours_better << ", occt found none on " << occt_found_none << "\n";
+}
+
+// Brute force: the nearest of a dense parameter grid, refined by OpenCASCADE inside the neighbouring grid cells.
+struct BruteForce {
+  const Surface& s;
+  Handle(Geom_BSplineSurface) ref;
+  int nu, nv;
+  std::vector<Point3> grid;
+
+  BruteForce(const Surface& surface, int samples_u, int samples_v)
+      : s(surface), ref(occt::to_occt(surface)), nu(samples_u), nv(samples_v), grid(std::size_t(nu) * nv) {
+    for (int a = 0; a < nu; ++a)
+      for (int b = 0; b < nv; ++b) grid[a * nv + b] = evaluate(s, par_u(a), par_v(b));
+  }
+  double par_u(int a) const { return s.domain().u0 + (s.domain().u1 - s.domain().u0) * a / (nu - 1); }
+  double par_v(int b) const { return s.domain().v0 + (s.domain().v1 - s.domain().v0) * b / (nv - 1); }
+
+  double distance(const Point3& q) const {
+    std::size_t best = 0;
+    double best_sq = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < grid.size(); ++k) {
+      const double d = (grid[k] - q).squaredNorm();
+      if (d < best_sq) best_sq = d, best = k;
+    }
+    const int a = static_cast<int>(best) / nv, b = static_cast<int>(best) % nv;
+    GeomAPI_ProjectPointOnSurf local;
+    local.Init(gp_Pnt(q.x(), q.y(), q.z()), ref, par_u(std::max(a - 1, 0)), par_u(std::min(a + 1, nu - 1)),
+               par_v(std::max(b - 1, 0)), par_v(std::min(b + 1, nv - 1)));
+    double d = std::sqrt(best_sq);
+    if (local.IsDone() && local.NbPoints() > 0) d = std::min(d, local.LowerDistance());
+    return d;
+  }
+};
+
+TEST(ClosestPointVsBruteForce, SpiralSheetHasNoWrongAnswersOn10000Points) {
+  const Surface s = testing::spiral_sheet();
+  ASSERT_EQ(s.U().num_spans(), 64);
+  const ClosestPointSolver solver(s);
+  const auto points = testing::random_points_near(s, 10000, 5.0, 77);
+  const auto ours = solver.closest_points(points);
+  const BruteForce brute(s, 64 * 16 + 1, 31);
+  std::vector<double> reference(points.size());
+  tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) { reference[i] = brute.distance(points[i]); });
+  int wrong = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    ASSERT_TRUE(ours[i].ok()) << to_string(ours[i].status) << " at point " << i;
+    if (ours[i].distance > reference[i] + kReferenceTolerance) {
+      ++wrong;
+      ADD_FAILURE() << "point " << i << " (" << points[i].transpose() << "): ours " << ours[i].distance
+                    << " brute force " << reference[i];
+      if (wrong > 10) break;
+    }
+  }
+  EXPECT_EQ(wrong, 0);
+}
+
+}  // namespace
+}  // namespace probecomp::nurbs

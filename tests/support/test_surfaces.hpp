@@ -1,0 +1,36 @@
+#pragma once
+// Test geometry: random rational surfaces, a two-turn spiral sheet, and random points near a surface.
+// Deterministic for a given seed.
+
+#include <cstdint>
+#include <vector>
+
+#include "nurbs/surface.hpp"
+
+namespace probecomp::testing {
+
+struct RandomSurfaceSpec {
+  int p = 3, q = 3;
+  int nu = 8, nv = 7;          // control points per direction
+  double size = 100.0;         // extent of the net in x and y, mm
+  double height = 15.0;        // random z amplitude of the control points, mm
+  double weight_min = 0.5, weight_max = 2.0;
+  bool repeated_knots = true;  // one interior knot of multiplicity 2 in each direction where room allows
+};
+
+// A free-form rational surface over [0,1]² with random non-uniform knots, bumpy z and random weights.
+[[nodiscard]] nurbs::Surface random_rational_surface(std::uint64_t seed, const RandomSurfaceSpec& spec = {});
+
+// A smooth free-form panel like a body or blade surface: n × n control points over 200 × 200 mm, heights from
+// two crossing waves (about ±25 mm), random non-uniform knots, weights in [0.8, 1.25]. Degree 3 × 3.
+[[nodiscard]] nurbs::Surface freeform_panel(std::uint64_t seed, int n = 20);
+
+// A two-turn Archimedean spiral sheet (radius 10 mm growing 6 mm per turn), 64 cubic spans along the spiral,
+// extruded 30 mm in z (degree 1). Neighbouring sheets are 6 mm apart.
+[[nodiscard]] nurbs::Surface spiral_sheet();
+
+// n points S(u,v) + t·n(u,v) with (u,v) uniform on the domain and t uniform in [-max_offset, max_offset].
+[[nodiscard]] std::vector<Point3> random_points_near(const nurbs::Surface& s, std::size_t n, double max_offset,
+                                                     std::uint64_t seed);
+
+}  // namespace probecomp::testing
