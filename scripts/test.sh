@@ -11,9 +11,8 @@ flags=(-DCMAKE_BUILD_TYPE=Release)
 if [ "${1:-}" = "--sanitize" ]; then
   build_dir=build-sanitize
   flags=(-DCMAKE_BUILD_TYPE=Debug -DPROBECOMP_SANITIZE=ON -DPROBECOMP_BUILD_BENCH=OFF)
-  # Abort on the first report; OpenCASCADE and oneTBB keep process-lifetime singletons, which LeakSanitizer
-  # would report at exit, so leak checking stays on only for what the tests allocate and free themselves.
-  export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=0:abort_on_error=1:strict_string_checks=1}"
+  # Stop at the first report, leaks included.
+  export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}"
   export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 fi
 

@@ -22,9 +22,15 @@ void basis_functions(const KnotVector& U, int span, double u, double* N) {
   }
 }
 
-void basis_function_derivatives(const KnotVector& U, int span, double u, int n, double* ders) {
-  const int p = U.degree();
-  constexpr int W = kMaxDegree + 1;
+namespace {
+
+// A2.3 with the degree as a template parameter where it is known at compile time (P > 0): the loops unroll
+// and the tables fit the degree. P = 0 is the general case with the degree read at run time. The arithmetic
+// and its order are the same either way, so both give bit-identical results.
+template <int P>
+void derivatives_impl(const KnotVector& U, int span, double u, int n, double* ders) {
+  const int p = P > 0 ? P : U.degree();
+  constexpr int W = (P > 0 ? P : kMaxDegree) + 1;
   double ndu[W][W];  // ndu[j][r]: basis functions (upper triangle incl. diagonal) and knot differences
   double a[2][W];
   double left[W];
@@ -80,6 +86,19 @@ void basis_function_derivatives(const KnotVector& U, int span, double u, int n, 
   }
   for (int k = nk + 1; k <= n; ++k) {
     for (int j = 0; j <= p; ++j) ders[k * (p + 1) + j] = 0.0;
+  }
+}
+
+}  // namespace
+
+void basis_function_derivatives(const KnotVector& U, int span, double u, int n, double* ders) {
+  switch (U.degree()) {
+    case 1: return derivatives_impl<1>(U, span, u, n, ders);
+    case 2: return derivatives_impl<2>(U, span, u, n, ders);
+    case 3: return derivatives_impl<3>(U, span, u, n, ders);
+    case 4: return derivatives_impl<4>(U, span, u, n, ders);
+    case 5: return derivatives_impl<5>(U, span, u, n, ders);
+    default: return derivatives_impl<0>(U, span, u, n, ders);
   }
 }
 
