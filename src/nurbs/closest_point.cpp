@@ -191,13 +191,6 @@ struct CellAxis {
   [[nodiscard]] int count() const { return static_cast<int>(breaks.size() - 1) * per_span; }
   [[nodiscard]] double lower(int c) const { return at(c / per_span, c % per_span); }
   [[nodiscard]] double upper(int c) const { return at(c / per_span, c % per_span + 1); }
-  [[nodiscard]] int cell_of(double t) const {
-    const int spans = static_cast<int>(breaks.size()) - 1;
-    int k = static_cast<int>(std::upper_bound(breaks.begin(), breaks.end(), t) - breaks.begin()) - 1;
-    k = std::clamp(k, 0, spans - 1);
-    const double frac = (t - breaks[k]) / (breaks[k + 1] - breaks[k]);
-    return k * per_span + std::clamp(static_cast<int>(frac * per_span), 0, per_span - 1);
-  }
 
  private:
   [[nodiscard]] double at(int span, int sub) const {
@@ -295,6 +288,17 @@ struct ClosestPointSolver::Seeds {
 };
 
 namespace {
+// Seed cell (cu, cv) as a Bézier patch: its control points in the refined surface and its parameter box.
+BezierPatch cell_patch(const Surface& bezier, const CellAxis& axis_u, const CellAxis& axis_v, int cu, int cv) {
+  const int p = bezier.p();
+  const int q = bezier.q();
+  BezierPatch patch{p, q, {axis_u.lower(cu), axis_u.upper(cu), axis_v.lower(cv), axis_v.upper(cv)}, {}};
+  patch.net.reserve(static_cast<std::size_t>((p + 1) * (q + 1)));
+  for (int a = 0; a <= p; ++a)
+    for (int b = 0; b <= q; ++b) patch.net.push_back(bezier.homogeneous(cu * p + a, cv * q + b));
+  return patch;
+}
+
 // The knots that make every cell of the axis a Bézier segment: each cell boundary at multiplicity = degree.
 std::vector<double> bezier_knots(const CellAxis& axis, const KnotVector& U) {
   std::vector<double> X;
@@ -318,7 +322,6 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
   const int nv = sd.axis_v.count();
   sd.bezier =
       refine_knots_v(refine_knots_u(surface_, bezier_knots(sd.axis_u, surface_.U())), bezier_knots(sd.axis_v, surface_.V()));
-  const Surface& bezier = sd.bezier;
 
   const std::size_t n = static_cast<std::size_t>(nu) * nv;
   sd.cloud.points.resize(n);
@@ -344,20 +347,10 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
         box.t2 = Vector3::UnitY();
         box.n = Vector3::UnitZ();
       }
-      box.lo = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
-      box.hi = -box.lo;
+      const BezierPatch patch = cell_patch(sd.bezier, sd.axis_u, sd.axis_v, i, j);
+      box.enclose(d.S, patch.net);
       double r = 0.0;
-      for (int a = 0; a <= p; ++a) {
-        for (int b = 0; b <= q; ++b) {
-          const Vector3 e = bezier.control_point(i * p + a, j * q + b) - d.S;
-          const Eigen::Array3d x(e.dot(box.t1), e.dot(box.t2), e.dot(box.n));
-          box.lo = box.lo.min(x);
-          box.hi = box.hi.max(x);
-          r = std::max(r, e.norm());
-        }
-      }
-      box.lo -= kCellBoundFloor;
-      box.hi += kCellBoundFloor;
+      for (const HomogeneousPoint& P : patch.net) r = std::max(r, (P.head<3>() / P.w() - d.S).norm());
       sd.cloud.points[k] = d.S;
       sd.radius[k] = r + kCellBoundFloor;
     }
@@ -438,13 +431,8 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, Close
   const int cv = static_cast<int>(k) % nv;
   // Newton inside the cell finds the cell's own minimum; unconstrained, it could run across a knot where the
   // surface is only C0 or C1 into a neighbour's basin and miss a closer point here.
-  const Domain cell{sd.axis_u.lower(cu), sd.axis_u.upper(cu), sd.axis_v.lower(cv), sd.axis_v.upper(cv)};
   CellSearch search{surface_, query, sd.box[k], sd.cloud.points[k], options_.max_iterations, best};
-  const int p = surface_.p();
-  const int q = surface_.q();
-  BezierPatch patch{p, q, cell, std::vector<HomogeneousPoint>(static_cast<std::size_t>((p + 1) * (q + 1)))};
-  for (int a = 0; a <= p; ++a)
-    for (int b = 0; b <= q; ++b) patch.net[a * (q + 1) + b] = sd.bezier.homogeneous(cu * p + a, cv * q + b);
+  const BezierPatch patch = cell_patch(sd.bezier, sd.axis_u, sd.axis_v, cu, cv);
   search.search(patch, 0);
   iterations += search.iterations;
   starts += search.starts;
