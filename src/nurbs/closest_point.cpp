@@ -371,6 +371,7 @@ namespace {
 // How often a cell may be split in four when Newton inside it stops on one of its inner edges while its
 // bound still allows a closer point: such a cell may hold a second minimum (e.g. beside a C0 crease).
 constexpr int kMaxSubdivisionDepth = 3;
+static_assert(kMaxSubdivisionDepth > 0, "a seed cell whose Newton stops on an inner edge is always split once");
 
 struct CellSearch {
   const Surface& surface;
@@ -410,7 +411,10 @@ struct CellSearch {
   // Branch and bound: a box whose Newton stopped on an inner edge may hold another minimum; split it while
   // the boxes of its parts are nearer than the best point.
   void search(const BezierPatch& patch, int depth) {
-    if (!run(patch.box) || depth >= kMaxSubdivisionDepth) return;
+    if (run(patch.box) && depth < kMaxSubdivisionDepth) search_parts(patch, depth);
+  }
+
+  void search_parts(const BezierPatch& patch, int depth) {
     for (const BezierPatch& half : split(patch, 0)) {
       for (const BezierPatch& quarter : split(half, 1)) {
         CellBox sub = frame;
@@ -431,9 +435,10 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, Close
   const int cv = static_cast<int>(k) % nv;
   // Newton inside the cell finds the cell's own minimum; unconstrained, it could run across a knot where the
   // surface is only C0 or C1 into a neighbour's basin and miss a closer point here.
+  // The cell's Bézier net is gathered only when the cell has to be split, which is rare.
   CellSearch search{surface_, query, sd.box[k], sd.cloud.points[k], options_.max_iterations, best};
-  const BezierPatch patch = cell_patch(sd.bezier, sd.axis_u, sd.axis_v, cu, cv);
-  search.search(patch, 0);
+  const Domain cell{sd.axis_u.lower(cu), sd.axis_u.upper(cu), sd.axis_v.lower(cv), sd.axis_v.upper(cv)};
+  if (search.run(cell)) search.search_parts(cell_patch(sd.bezier, sd.axis_u, sd.axis_v, cu, cv), 0);
   iterations += search.iterations;
   starts += search.starts;
 }
