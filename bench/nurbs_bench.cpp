@@ -40,13 +40,20 @@ void BM_ClosestPoint(benchmark::State& state) {
   const Fixture& f = Fixture::get();
   const nurbs::ClosestPointSolver solver(f.surface);
   std::size_t not_ok = 0;
+  std::size_t starts = 0;
+  std::size_t iterations = 0;
   for (auto _ : state) {
     for (const Point3& q : f.points) {
       const auto r = solver.closest_point(q);
       not_ok += !r.ok();
+      starts += static_cast<std::size_t>(r.starts);
+      iterations += static_cast<std::size_t>(r.iterations);
       benchmark::DoNotOptimize(r.distance);
     }
   }
+  const double queries = static_cast<double>(state.iterations() * f.points.size());
+  state.counters["starts_per_query"] = static_cast<double>(starts) / queries;
+  state.counters["newton_per_query"] = static_cast<double>(iterations) / queries;
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * f.points.size()));
   state.counters["not_ok"] = static_cast<double>(not_ok);
   state.counters["seeds"] = static_cast<double>(solver.seed_count());
