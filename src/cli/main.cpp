@@ -1,9 +1,187 @@
-// probecomp command-line tool. Subcommands arrive with later work (info, project, compensate, demo, ...).
+// probecomp command-line tool: info, project and plan on CAD models; later work adds compensate, demo, study.
+// Every failure is one line on standard error ("probecomp: FILE:LINE: cause") and exit status 1; output files
+// are written whole or not at all.
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cstdio>
 #include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
 
+#include "cad/locator.hpp"
+#include "cad/model.hpp"
+#include "cad/plan.hpp"
+#include "io/point_table.hpp"
 #include "version.hpp"
+
+namespace {
+
+using namespace probecomp;
+
+std::string fmt(const char* format, double value) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, value + 0.0);  // + 0.0 turns −0 into 0
+  return buf;
+}
+std::string mm(double v) { return fmt("%.9f", v); }
+std::string unit(double v) { return fmt("%.12f", v); }
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      out += fmt("\\u%04x", static_cast<unsigned char>(c));
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
+// Writes to the file (atomically) or to standard output when no file is given.
+void emit(const std::string& output, const std::string& text) {
+  if (output.empty()) {
+    std::cout << text;
+  } else {
+    io::write_file_atomically(output, text);
+  }
+}
+
+std::vector<int> parse_face_list(const std::string& list) {
+  std::vector<int> faces;
+  std::stringstream in(list);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      const auto dash = item.find('-', 1);
+      std::size_t used = 0;
+      if (dash == std::string::npos) {
+        faces.push_back(std::stoi(item, &used));
+        if (used != item.size()) throw std::invalid_argument(item);
+      } else {
+        const int a = std::stoi(item.substr(0, dash));
+        const int b = std::stoi(item.substr(dash + 1), &used);
+        if (used != item.size() - dash - 1 || b < a) throw std::invalid_argument(item);
+        for (int f = a; f <= b; ++f) faces.push_back(f);
+      }
+    } catch (const std::logic_error&) {
+      throw std::invalid_argument("--faces: '" + item + "' is not a face index or range like 3-7");
+    }
+  }
+  return faces;
+}
+
+int run_info(const std::string& part, bool json) {
+  const cad::Model model = cad::read_model(part);
+  int rational = 0, trimmed = 0, solid = 0;
+  for (const cad::Face& f : model.faces) {
+    rational += f.surface.is_rational();
+    trimmed += f.trimmed();
+    solid += f.material_known;
+  }
+  std::ostringstream out;
+  if (json) {
+    out << "{\"file\": " << json_string(part) << ", \"units\": \"mm\", \"file_units\": " << json_string(model.file_units)
+        << ",\n \"faces\": [\n";
+    for (std::size_t k = 0; k < model.faces.size(); ++k) {
+      const cad::Face& f = model.faces[k];
+      const BoundingBox b = nurbs::bounding_box(f.surface);
+      out << "  {\"index\": " << f.index << ", \"name\": " << json_string(f.name) << ", \"type\": " << json_string(f.source_type)
+          << ", \"degree\": [" << f.surface.p() << ", " << f.surface.q() << "], \"poles\": [" << f.surface.num_u() << ", "
+          << f.surface.num_v() << "], \"rational\": " << (f.surface.is_rational() ? "true" : "false")
+          << ", \"trimmed\": " << (f.trimmed() ? "true" : "false") << ", \"material_side\": "
+          << (f.material_known ? "\"solid\"" : "\"unknown\"") << ", \"bbox\": {\"min\": [" << mm(b.min.x()) << ", "
+          << mm(b.min.y()) << ", " << mm(b.min.z()) << "], \"max\": [" << mm(b.max.x()) << ", " << mm(b.max.y()) << ", "
+          << mm(b.max.z()) << "]}}" << (k + 1 < model.faces.size() ? "," : "") << "\n";
+    }
+    out << " ],\n \"totals\": {\"faces\": " << model.faces.size() << ", \"rational\": " << rational
+        << ", \"trimmed\": " << trimmed << ", \"in_solids\": " << solid << "}}\n";
+  } else {
+    out << "# " << part << ": units mm (file: " << model.file_units << ")\n";
+    out << "# face  type        degree  poles     rational  trimmed  material  bbox min (mm)  bbox max (mm)\n";
+    for (const cad::Face& f : model.faces) {
+      const BoundingBox b = nurbs::bounding_box(f.surface);
+      char line[512];
+      std::snprintf(line, sizeof line, "%6d  %-10s  %dx%-4d  %4dx%-4d  %-8s  %-7s  %-8s  %.3f %.3f %.3f  %.3f %.3f %.3f%s%s\n",
+                    f.index, f.source_type.c_str(), f.surface.p(), f.surface.q(), f.surface.num_u(), f.surface.num_v(),
+                    f.surface.is_rational() ? "yes" : "no", f.trimmed() ? "yes" : "no",
+                    f.material_known ? "solid" : "unknown", b.min.x(), b.min.y(), b.min.z(), b.max.x(), b.max.y(),
+                    b.max.z(), f.name.empty() ? "" : "  ", f.name.c_str());
+      out << line;
+    }
+    out << "total: " << model.faces.size() << " faces, " << rational << " rational, " << trimmed << " trimmed, " << solid
+        << " on solids; units mm (file: " << model.file_units << ")\n";
+  }
+  std::cout << out.str();
+  return 0;
+}
+
+int run_project(const std::string& part, const std::string& points_file, const std::string& output) {
+  const io::PointTable table = io::read_point_csv(points_file);
+  const cad::Model model = cad::read_model(part);
+  const cad::ModelLocator locator(model);
+  const std::vector<cad::ModelPoint> found = locator.closest_points(table.points);
+  const std::vector<int> carried = table.carried_columns();
+  std::ostringstream out;
+  const std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "distance", "face", "u", "v", "status"};
+  out << "x,y,z,nx,ny,nz,distance,face,u,v,status";
+  for (int c : carried) {
+    // A carried column named like one of ours is renamed so that every header name stays unique.
+    const std::string& name = table.columns[static_cast<std::size_t>(c)];
+    out << ',' << (std::find(ours.begin(), ours.end(), name) != ours.end() ? "input_" + name : name);
+  }
+  out << '\n';
+  for (std::size_t k = 0; k < found.size(); ++k) {
+    const cad::ModelPoint& m = found[k];
+    if (m.ok()) {
+      out << mm(m.point.x()) << ',' << mm(m.point.y()) << ',' << mm(m.point.z()) << ',' << unit(m.normal.x()) << ','
+          << unit(m.normal.y()) << ',' << unit(m.normal.z()) << ',' << mm(m.distance) << ',' << m.face << ','
+          << unit(m.u) << ',' << unit(m.v) << ',' << (m.on_trim_edge ? "trim-edge" : "ok");
+    } else {
+      // Never dropped: the row is there, empty, with the reason.
+      out << ",,,,,,,,,," << nurbs::to_string(m.status);
+    }
+    for (int c : carried) out << ',' << table.rows[k][static_cast<std::size_t>(c)];
+    out << '\n';
+  }
+  emit(output, out.str());
+  return 0;
+}
+
+int run_plan(const std::string& part, double spacing, const std::string& face_list, const std::string& output) {
+  const bool dmis = output.size() > 4 && (output.ends_with(".dmi") || output.ends_with(".DMI"));
+  const std::vector<int> faces = parse_face_list(face_list);
+  const cad::Model model = cad::read_model(part);
+  const std::vector<cad::PlannedPoint> plan = cad::plan_points(model, spacing, faces);
+  if (plan.empty()) throw std::invalid_argument("no points fit on the chosen faces at spacing " + mm(spacing) + " mm");
+  std::ostringstream out;
+  if (dmis) {
+    out << "DMISMN/'probecomp measurement plan for " << part << "',05.3\nUNITS/MM,ANGDEC\n";
+    for (std::size_t k = 0; k < plan.size(); ++k) {
+      const auto& p = plan[k];
+      const std::string xyz = mm(p.point.x()) + "," + mm(p.point.y()) + "," + mm(p.point.z()) + "," + unit(p.normal.x()) +
+                              "," + unit(p.normal.y()) + "," + unit(p.normal.z());
+      out << "F(P" << k + 1 << ")=FEAT/POINT,CART," << xyz << "\n";
+      out << "MEAS/POINT,F(P" << k + 1 << "),1\n";
+      out << "PTMEAS/CART," << xyz << "\n";
+      out << "ENDMES\n";
+    }
+    out << "ENDFIL\n";
+  } else {
+    out << "x,y,z,i,j,k,face\n";
+    for (const auto& p : plan) {
+      out << mm(p.point.x()) << ',' << mm(p.point.y()) << ',' << mm(p.point.z()) << ',' << unit(p.normal.x()) << ','
+          << unit(p.normal.y()) << ',' << unit(p.normal.z()) << ',' << p.face << '\n';
+    }
+  }
+  emit(output, out.str());
+  return 0;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -12,13 +190,40 @@ int main(int argc, char** argv) {
       "probecomp"};
   app.set_version_flag("--version", std::string("probecomp ") + probecomp::kVersion);
   app.require_subcommand(0, 1);
+
+  std::string part, points, output, faces;
+  bool json = false;
+  double spacing = 0.0;
+
+  CLI::App* info = app.add_subcommand("info", "List the faces of a STEP or IGES model (geometry in mm).");
+  info->add_option("part", part, "CAD file (.stp, .step, .igs, .iges)")->required();
+  info->add_flag("--json", json, "Print a JSON object: units and one object per face");
+
+  CLI::App* project = app.add_subcommand(
+      "project", "Closest point on the model for each point (find nominals): x,y,z,nx,ny,nz,distance,face,u,v,status.");
+  project->add_option("--cad", part, "CAD file")->required();
+  project->add_option("--points", points, "CSV with a header naming x,y,z (other columns are carried)")->required();
+  project->add_option("--output", output, "Output CSV (default: standard output)");
+
+  CLI::App* plan = app.add_subcommand("plan", "Nominal measurement points with outward normals on the model's faces.");
+  plan->add_option("part", part, "CAD file")->required();
+  plan->add_option("--spacing", spacing, "Distance between points along the surface, mm")->required();
+  plan->add_option("--faces", faces, "Faces to plan on, e.g. 0,3,5-9 (default: all)");
+  plan->add_option("--output", output, "PLAN.csv (x,y,z,i,j,k,face) or PLAN.dmi (DMIS PTMEAS program); default: CSV on standard output");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
-  if (app.get_subcommands().empty()) {
-    std::cout << app.help();
+  try {
+    if (info->parsed()) return run_info(part, json);
+    if (project->parsed()) return run_project(part, points, output);
+    if (plan->parsed()) return run_plan(part, spacing, faces, output);
+  } catch (const std::exception& e) {
+    std::cerr << "probecomp: " << e.what() << '\n';
+    return 1;
   }
+  std::cout << app.help();
   return 0;
 }

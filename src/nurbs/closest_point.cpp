@@ -283,6 +283,7 @@ struct ClosestPointSolver::Seeds {
   SeedCloud cloud;
   std::vector<double> u, v, radius;  // radius: largest distance from the seed to its cell's control points
   std::vector<CellBox> box;
+  std::vector<char> in_region;  // the cell meets the region (all cells without one)
   double max_radius = 0.0;
   std::unique_ptr<SeedTree> tree;
 };
@@ -310,8 +311,8 @@ std::vector<double> bezier_knots(const CellAxis& axis, const KnotVector& U) {
 }
 }  // namespace
 
-ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions options)
-    : surface_(std::move(surface)), options_(options) {
+ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions options, const ParameterRegion* region)
+    : surface_(std::move(surface)), options_(options), region_(region) {
   seeds_ = std::make_unique<Seeds>(surface_);
   Seeds& sd = *seeds_;
   const int p = surface_.p();
@@ -329,6 +330,7 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
   sd.v.resize(n);
   sd.radius.resize(n);
   sd.box.resize(n);
+  sd.in_region.assign(n, 1);
   tbb::parallel_for(0, nu, [&](int i) {
     for (int j = 0; j < nv; ++j) {
       const std::size_t k = static_cast<std::size_t>(i) * nv + j;
@@ -351,6 +353,7 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
       box.enclose(d.S, patch.net);
       double r = 0.0;
       for (const HomogeneousPoint& P : patch.net) r = std::max(r, (P.head<3>() / P.w() - d.S).norm());
+      if (region_ != nullptr) sd.in_region[k] = region_->meets(patch.box) ? 1 : 0;
       sd.cloud.points[k] = d.S;
       sd.radius[k] = r + kCellBoundFloor;
     }
@@ -378,6 +381,7 @@ struct CellSearch {
   const Point3& query;
   const CellBox& frame;  // the seed cell's frame, reused for its sub-cells' boxes
   const Point3& origin;
+  const ParameterRegion* region;
   int max_iterations;
   ClosestPointResult& best;
   int iterations = 0;
@@ -402,9 +406,9 @@ struct CellSearch {
       // The minimum lies beyond the edge: follow it (f only decreases on the way).
       ClosestPointResult polished = refine_closest_point(surface, query, r.u, r.v, max_iterations);
       iterations += polished.iterations;
-      r = polished;
+      if (region == nullptr || region->contains(polished.u, polished.v)) r = polished;
     }
-    if (closer(r, best)) best = r;
+    if (closer(r, best) && (region == nullptr || region->contains(r.u, r.v))) best = r;
     return on_inner_edge;
   }
 
@@ -436,7 +440,7 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, Close
   // Newton inside the cell finds the cell's own minimum; unconstrained, it could run across a knot where the
   // surface is only C0 or C1 into a neighbour's basin and miss a closer point here.
   // The cell's Bézier net is gathered only when the cell has to be split, which is rare.
-  CellSearch search{surface_, query, sd.box[k], sd.cloud.points[k], options_.max_iterations, best};
+  CellSearch search{surface_, query, sd.box[k], sd.cloud.points[k], region_, options_.max_iterations, best};
   const Domain cell{sd.axis_u.lower(cu), sd.axis_u.upper(cu), sd.axis_v.lower(cv), sd.axis_v.upper(cv)};
   if (search.run(cell)) search.search_parts(cell_patch(sd.bezier, sd.axis_u, sd.axis_v, cu, cv), 0);
   iterations += search.iterations;
@@ -444,6 +448,10 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, Close
 }
 
 ClosestPointResult ClosestPointSolver::closest_point(const Point3& query) const {
+  return closest_point(query, ClosestPointResult{});
+}
+
+ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const ClosestPointResult& bound) const {
   const Seeds& sd = *seeds_;
   if (!query.allFinite()) {
     ClosestPointResult bad;
@@ -458,14 +466,16 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query) const 
   knn.init(&nearest, &nearest_dist_sq);
   sd.tree->findNeighbors(knn, q, nanoflann::SearchParams());
 
-  ClosestPointResult best;
+  ClosestPointResult best = bound;
   int iterations = 0;
   int starts = 0;
-  search_cell(query, nearest, best, iterations, starts);
+  if (sd.in_region[nearest]) search_cell(query, nearest, best, iterations, starts);
 
   // Every cell that could hold a closer point has its seed within best.distance + its radius: search that
-  // ball, then visit each cell once unless its bounding box is already farther than the best point.
-  const double reach = std::min(best.distance, std::sqrt(nearest_dist_sq)) + sd.max_radius;
+  // ball, then visit each cell once unless its bounding box is already farther than the best point. The
+  // nearest seed bounds the distance only when it lies on the searched surface (no region).
+  const double seed_bound = region_ == nullptr ? std::sqrt(nearest_dist_sq) : std::numeric_limits<double>::infinity();
+  const double reach = std::min(best.distance, seed_bound) + sd.max_radius;
   thread_local std::vector<std::pair<std::uint32_t, double>> candidates;  // (seed, squared distance)
   nanoflann::RadiusResultSet<double, std::uint32_t> within(reach * reach, candidates);
   sd.tree->findNeighbors(within, q, nanoflann::SearchParams());
@@ -473,7 +483,7 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query) const 
             [](const auto& a, const auto& b) { return a.second < b.second || (a.second == b.second && a.first < b.first); });
 
   for (const auto& [k, dist_sq] : candidates) {
-    if (k == nearest) continue;
+    if (k == nearest || !sd.in_region[k]) continue;
     if (std::sqrt(dist_sq) - sd.radius[k] >= best.distance) continue;
     if (sd.box[k].lower_bound(query - sd.cloud.points[k]) >= best.distance) continue;
     search_cell(query, k, best, iterations, starts);

@@ -64,9 +64,20 @@ struct ClosestPointOptions {
 [[nodiscard]] ClosestPointResult refine_closest_point_in(const Surface& s, const Point3& query, double u0, double v0,
                                                          const Domain& box, int max_iterations = 40);
 
+// A part of the parameter domain that results must lie in: a trimmed face's region. `meets` may answer true
+// for a box that misses the region (it only prunes), never false for one that meets it.
+class ParameterRegion {
+ public:
+  virtual ~ParameterRegion() = default;
+  [[nodiscard]] virtual bool contains(double u, double v) const = 0;
+  [[nodiscard]] virtual bool meets(const Domain& box) const = 0;
+};
+
 class ClosestPointSolver {
  public:
-  explicit ClosestPointSolver(Surface surface, ClosestPointOptions options = {});
+  // With a region, the solver looks only for minima inside it; the caller adds the region's boundary (see
+  // closest_point's `bound`). The region must outlive the solver.
+  explicit ClosestPointSolver(Surface surface, ClosestPointOptions options = {}, const ParameterRegion* region = nullptr);
   ~ClosestPointSolver();
   ClosestPointSolver(ClosestPointSolver&&) noexcept;
   ClosestPointSolver& operator=(ClosestPointSolver&&) noexcept;
@@ -75,6 +86,9 @@ class ClosestPointSolver {
   [[nodiscard]] std::size_t seed_count() const;
 
   [[nodiscard]] ClosestPointResult closest_point(const Point3& query) const;
+  // The closer of `bound` (a point already known, e.g. the nearest point of a trimmed face's boundary) and
+  // the surface's minima inside the region; cells farther than the bound are not searched.
+  [[nodiscard]] ClosestPointResult closest_point(const Point3& query, const ClosestPointResult& bound) const;
   // One result per query, in order; parallel (oneTBB), deterministic.
   [[nodiscard]] std::vector<ClosestPointResult> closest_points(std::span<const Point3> queries) const;
 
@@ -86,6 +100,7 @@ class ClosestPointSolver {
 
   Surface surface_;
   ClosestPointOptions options_;
+  const ParameterRegion* region_ = nullptr;
   std::unique_ptr<Seeds> seeds_;
 };
 

@@ -1,0 +1,294 @@
+#include "cad/locator.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Warray-bounds"
+#include <nanoflann.hpp>
+#pragma GCC diagnostic pop
+
+namespace probecomp::cad {
+
+using nurbs::ClosestPointResult;
+using nurbs::ClosestPointStatus;
+
+namespace {
+
+// Newton on a boundary curve stops when its step moves the point by less than this (mm), as on surfaces.
+constexpr double kEdgeStepTolerance = nurbs::kClosestPointStepTolerance;
+constexpr int kEdgeMaxIterations = 40;
+constexpr int kMaxHalvings = 30;
+
+struct SampleCloud {
+  std::vector<Point3> points;
+  [[nodiscard]] std::size_t kdtree_get_point_count() const { return points.size(); }
+  [[nodiscard]] double kdtree_get_pt(std::size_t i, std::size_t d) const { return points[i][static_cast<int>(d)]; }
+  template <class B>
+  bool kdtree_get_bbox(B&) const {
+    return false;
+  }
+};
+// nanoflann's L2 adaptor works with SQUARED distances: every distance it returns or takes is squared.
+using SampleTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, SampleCloud>, SampleCloud, 3,
+                                                       std::uint32_t>;
+
+struct CurvePoint {
+  double t, u, v, f;  // f = |S(C(t)) − Q|²
+  Point3 S;
+};
+
+CurvePoint at(const nurbs::Surface& s, const nurbs::Curve& c, const Point3& q, double t) {
+  const Point3 uv = nurbs::evaluate(c, t);
+  const Point3 S = nurbs::evaluate(s, uv.x(), uv.y());
+  return {t, uv.x(), uv.y(), (S - q).squaredNorm(), S};
+}
+
+// Minimises |S(C(t)) − Q|² over [ta, tb] from t0: Newton on the composite curve with its exact second
+// derivative (chain rule through the surface's and the pcurve's derivatives), Gauss–Newton where that is not
+// positive, clamped to the interval, backtracking so that the distance never grows.
+CurvePoint refine_on_curve(const nurbs::Surface& s, const nurbs::Curve& c, const Point3& q, double t0, double ta,
+                           double tb) {
+  CurvePoint cur = at(s, c, q, t0);
+  for (int it = 0; it < kEdgeMaxIterations; ++it) {
+    const nurbs::CurveD2 cd = nurbs::derivatives_d2(c, cur.t);
+    const nurbs::SurfaceD2 sd = nurbs::derivatives_d2(s, cur.u, cur.v);
+    const double du = cd.Cu.x(), dv = cd.Cu.y();
+    const Vector3 T = sd.Su * du + sd.Sv * dv;
+    const Vector3 A =
+        sd.Suu * du * du + 2.0 * sd.Suv * du * dv + sd.Svv * dv * dv + sd.Su * cd.Cuu.x() + sd.Sv * cd.Cuu.y();
+    const Vector3 r = sd.S - q;
+    const double g1 = r.dot(T);
+    double g2 = T.dot(T) + r.dot(A);
+    if (!(g2 > 0.0)) g2 = T.dot(T);
+    if (!(g2 > 0.0)) break;
+    double step = -g1 / g2;
+    CurvePoint next = cur;
+    bool decreased = false;
+    for (int h = 0; h <= kMaxHalvings; ++h) {
+      next = at(s, c, q, std::clamp(cur.t + step, ta, tb));
+      if (next.f <= cur.f) {
+        decreased = true;
+        break;
+      }
+      step *= 0.5;
+    }
+    if (!decreased) break;
+    const double moved = (next.S - cur.S).norm();
+    cur = next;
+    if (moved < kEdgeStepTolerance) break;
+  }
+  return cur;
+}
+
+double box_distance(const BoundingBox& b, const Point3& q) {
+  const Eigen::Array3d gap = (b.min - q).array().max((q - b.max).array()).max(0.0);
+  return std::sqrt(gap.square().sum());
+}
+
+bool closer(const ModelPoint& a, const ModelPoint& b) {
+  const double da = std::abs(a.distance), db = std::abs(b.distance);
+  if (da != db) return da < db;
+  return a.face < b.face;
+}
+
+}  // namespace
+
+struct TrimmedFaceLocator::Boundary {
+  SampleCloud cloud;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> where;  // (curve, sample index) of each sample
+  double max_gap = 0.0;                                        // longest chord between neighbouring samples, mm
+  std::unique_ptr<SampleTree> tree;
+};
+
+TrimmedFaceLocator::TrimmedFaceLocator(const Face& face)
+    : face_(&face), solver_(face.surface, {}, face.trim.get()) {
+  if (!face.trimmed()) return;
+  auto b = std::make_shared<Boundary>();
+  const auto& curves = face.trim->curves();
+  for (std::uint32_t c = 0; c < curves.size(); ++c) {
+    Point3 previous;
+    for (std::uint32_t k = 0; k < curves[c].t.size(); ++k) {
+      const Point3 uv = nurbs::evaluate(curves[c].uv, curves[c].t[k]);
+      const Point3 S = nurbs::evaluate(face.surface, uv.x(), uv.y());
+      if (k > 0) b->max_gap = std::max(b->max_gap, (S - previous).norm());
+      previous = S;
+      b->cloud.points.push_back(S);
+      b->where.emplace_back(c, k);
+    }
+  }
+  b->tree = std::make_unique<SampleTree>(3, b->cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  b->tree->buildIndex();
+  boundary_ = std::move(b);
+}
+
+ClosestPointResult TrimmedFaceLocator::closest_point_on_boundary(const Point3& query) const {
+  ClosestPointResult best;
+  if (!boundary_ || boundary_->cloud.points.empty()) return best;
+  const Boundary& b = *boundary_;
+  const double q[3] = {query.x(), query.y(), query.z()};
+  std::uint32_t nearest = 0;
+  double nearest_sq = 0.0;  // squared (nanoflann)
+  nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(1);
+  knn.init(&nearest, &nearest_sq);
+  b.tree->findNeighbors(knn, q, nanoflann::SearchParams());
+  // The nearest boundary point lies within one chord (along the curve) of some sample, which is then within
+  // its distance plus that arc; 1.5 chords covers the arc's excess over the chord on curved boundaries.
+  const double reach = std::sqrt(nearest_sq) + 1.5 * b.max_gap;
+  thread_local std::vector<std::pair<std::uint32_t, double>> found;  // (sample, squared distance)
+  nanoflann::RadiusResultSet<double, std::uint32_t> within(reach * reach, found);
+  b.tree->findNeighbors(within, q, nanoflann::SearchParams());
+  std::sort(found.begin(), found.end());
+
+  const auto& curves = face_->trim->curves();
+  CurvePoint best_point{0, 0, 0, std::numeric_limits<double>::infinity(), Point3::Zero()};
+  std::uint32_t last_curve = ~0u, last_sample = ~0u;
+  for (const auto& [id, dist_sq] : found) {
+    const auto [c, k] = b.where[id];
+    // Neighbouring samples of one curve refine over the same interval: skip the repeats.
+    if (c == last_curve && k == last_sample + 1) {
+      last_sample = k;
+      continue;
+    }
+    last_curve = c;
+    last_sample = k;
+    const std::vector<double>& t = curves[c].t;
+    const double ta = t[k == 0 ? 0 : k - 1];
+    const double tb = t[std::min<std::size_t>(k + 1, t.size() - 1)];
+    const CurvePoint p = refine_on_curve(face_->surface, curves[c].uv, query, t[k], ta, tb);
+    if (p.f < best_point.f) best_point = p;
+  }
+  best.status = ClosestPointStatus::OnBoundary;
+  best.u = best_point.u;
+  best.v = best_point.v;
+  best.point = best_point.S;
+  best.distance = std::sqrt(best_point.f);
+  return best;
+}
+
+ClosestPointResult TrimmedFaceLocator::closest_point(const Point3& query, bool& on_trim_edge) const {
+  on_trim_edge = false;
+  if (!face_->trimmed()) return solver_.closest_point(query);
+  const ClosestPointResult edge = closest_point_on_boundary(query);
+  ClosestPointResult r = solver_.closest_point(query, edge);
+  on_trim_edge = r.u == edge.u && r.v == edge.v && r.distance == edge.distance;
+  return r;
+}
+
+ModelLocator::ModelLocator(const Model& model) : model_(&model) {
+  const std::size_t n = model.faces.size();
+  faces_.resize(n);
+  boxes_.resize(n);
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t k) {
+    faces_[k] = std::make_unique<TrimmedFaceLocator>(model.faces[k]);
+    boxes_[k] = nurbs::bounding_box(model.faces[k].surface);
+  });
+  order_.resize(n);
+  std::iota(order_.begin(), order_.end(), 0);
+  if (n > 0) build(0, static_cast<int>(n));
+}
+
+ModelLocator::~ModelLocator() = default;
+
+// Median split along the longest axis of the box centres, down to leaves of a few faces.
+int ModelLocator::build(int first, int count) {
+  constexpr int kLeafFaces = 2;
+  const int id = static_cast<int>(nodes_.size());
+  nodes_.push_back({});
+  BoundingBox box;
+  BoundingBox centres;
+  for (int k = first; k < first + count; ++k) {
+    const BoundingBox& b = boxes_[static_cast<std::size_t>(order_[static_cast<std::size_t>(k)])];
+    box.extend(b.min);
+    box.extend(b.max);
+    centres.extend(0.5 * (b.min + b.max));
+  }
+  nodes_[static_cast<std::size_t>(id)].box = box;
+  if (count <= kLeafFaces) {
+    nodes_[static_cast<std::size_t>(id)].first = first;
+    nodes_[static_cast<std::size_t>(id)].count = count;
+    return id;
+  }
+  int axis = 0;
+  (centres.max - centres.min).maxCoeff(&axis);
+  const int half = count / 2;
+  auto begin = order_.begin() + first;
+  std::nth_element(begin, begin + half, begin + count, [&](int a, int b) {
+    const double ca = boxes_[static_cast<std::size_t>(a)].min[axis] + boxes_[static_cast<std::size_t>(a)].max[axis];
+    const double cb = boxes_[static_cast<std::size_t>(b)].min[axis] + boxes_[static_cast<std::size_t>(b)].max[axis];
+    return ca < cb || (ca == cb && a < b);
+  });
+  const int left = build(first, half);
+  const int right = build(first + half, count - half);
+  nodes_[static_cast<std::size_t>(id)].left = left;
+  nodes_[static_cast<std::size_t>(id)].right = right;
+  return id;
+}
+
+Vector3 ModelLocator::outward_normal(int face, double u, double v) const {
+  const Face& f = model_->faces[static_cast<std::size_t>(face)];
+  const nurbs::UnitNormal n = nurbs::unit_normal(f.surface, u, v);
+  return static_cast<double>(f.outward) * n.n;
+}
+
+ModelPoint ModelLocator::closest_point(const Point3& query) const {
+  ModelPoint best;
+  best.distance = std::numeric_limits<double>::infinity();
+  if (nodes_.empty()) return best;
+  if (!query.allFinite()) {
+    best.status = ClosestPointStatus::NumericalError;
+    return best;
+  }
+  // Depth-first, nearer child first; a node is skipped when its box is farther than the best point (ties
+  // are kept so that the lower face index wins whatever the visiting order).
+  int stack[128];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[static_cast<std::size_t>(stack[--top])];
+    if (box_distance(node.box, query) > std::abs(best.distance)) continue;
+    if (node.left < 0) {
+      for (int k = node.first; k < node.first + node.count; ++k) {
+        const int f = order_[static_cast<std::size_t>(k)];
+        if (box_distance(boxes_[static_cast<std::size_t>(f)], query) > std::abs(best.distance)) continue;
+        bool on_edge = false;
+        const ClosestPointResult r = faces_[static_cast<std::size_t>(f)]->closest_point(query, on_edge);
+        if (!r.ok()) {
+          if (best.face < 0 && !std::isfinite(best.distance)) best.status = r.status;
+          continue;
+        }
+        ModelPoint m;
+        m.status = r.status;
+        m.face = f;
+        m.u = r.u;
+        m.v = r.v;
+        m.point = r.point;
+        m.normal = outward_normal(f, r.u, r.v);
+        m.on_trim_edge = on_edge;
+        const double side = (query - r.point).dot(m.normal);
+        m.distance = side < 0.0 ? -r.distance : r.distance;
+        if (best.face < 0 || closer(m, best)) best = m;
+      }
+      continue;
+    }
+    const Node& l = nodes_[static_cast<std::size_t>(node.left)];
+    const Node& r = nodes_[static_cast<std::size_t>(node.right)];
+    const bool left_first = box_distance(l.box, query) <= box_distance(r.box, query);
+    stack[top++] = left_first ? node.right : node.left;
+    stack[top++] = left_first ? node.left : node.right;
+  }
+  return best;
+}
+
+std::vector<ModelPoint> ModelLocator::closest_points(std::span<const Point3> queries) const {
+  std::vector<ModelPoint> out(queries.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, queries.size(), 64), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) out[i] = closest_point(queries[i]);
+  });
+  return out;
+}
+
+}  // namespace probecomp::cad

@@ -1,0 +1,72 @@
+#pragma once
+// Closest point on a CAD model ("find nominals"): over all faces, inside their trims. A bounding-volume
+// hierarchy over the faces' control-net boxes (rigorous: a NURBS lies in its control points' convex hull)
+// means a query visits only the faces that could hold a closer point.
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "cad/model.hpp"
+#include "nurbs/closest_point.hpp"
+
+namespace probecomp::cad {
+
+struct ModelPoint {
+  nurbs::ClosestPointStatus status = nurbs::ClosestPointStatus::NotConverged;
+  int face = -1;
+  double u = 0.0, v = 0.0;
+  Point3 point = Point3::Zero();
+  Vector3 normal = Vector3::Zero();  // outward unit normal of the face at the point (zero where it has none)
+  double distance = 0.0;             // signed: + on the outward side of the face, mm
+  bool on_trim_edge = false;         // the point lies on the face's trimming boundary
+
+  [[nodiscard]] bool ok() const {
+    return status == nurbs::ClosestPointStatus::Converged || status == nurbs::ClosestPointStatus::OnBoundary;
+  }
+};
+
+// Closest point on one trimmed face: the nearer of the nearest boundary point (exact, on the pcurves) and the
+// surface's minima inside the trim.
+class TrimmedFaceLocator {
+ public:
+  explicit TrimmedFaceLocator(const Face& face);
+  [[nodiscard]] nurbs::ClosestPointResult closest_point(const Point3& query, bool& on_trim_edge) const;
+  [[nodiscard]] nurbs::ClosestPointResult closest_point_on_boundary(const Point3& query) const;
+
+ private:
+  struct Boundary;
+  const Face* face_;
+  nurbs::ClosestPointSolver solver_;
+  std::shared_ptr<const Boundary> boundary_;
+};
+
+class ModelLocator {
+ public:
+  // The model must outlive the locator. Building it indexes every face (in parallel).
+  explicit ModelLocator(const Model& model);
+  ~ModelLocator();
+
+  [[nodiscard]] const Model& model() const { return *model_; }
+  [[nodiscard]] ModelPoint closest_point(const Point3& query) const;
+  // One result per query, in order; parallel and deterministic (ties go to the lower face index).
+  [[nodiscard]] std::vector<ModelPoint> closest_points(std::span<const Point3> queries) const;
+  // The outward unit normal of face `face` at (u, v).
+  [[nodiscard]] Vector3 outward_normal(int face, double u, double v) const;
+
+ private:
+  struct Node {
+    BoundingBox box;
+    int left = -1, right = -1;  // children, or -1 for a leaf
+    int first = 0, count = 0;   // the leaf's faces: order_[first .. first + count)
+  };
+  int build(int first, int count);
+
+  const Model* model_;
+  std::vector<std::unique_ptr<TrimmedFaceLocator>> faces_;
+  std::vector<BoundingBox> boxes_;
+  std::vector<int> order_;
+  std::vector<Node> nodes_;
+};
+
+}  // namespace probecomp::cad
