@@ -100,7 +100,9 @@ bool closer(const ModelPoint& a, const ModelPoint& b) {
 struct TrimmedFaceLocator::Boundary {
   SampleCloud cloud;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> where;  // (curve, sample index) of each sample
-  double max_gap = 0.0;                                        // longest chord between neighbouring samples, mm
+  std::vector<double> gap;   // longest chord from each sample to a neighbouring sample, mm
+  std::vector<std::vector<double>> t;  // sample parameters of each boundary curve
+  double max_gap = 0.0;      // longest chord of all
   std::unique_ptr<SampleTree> tree;
 };
 
@@ -109,15 +111,34 @@ TrimmedFaceLocator::TrimmedFaceLocator(const Face& face)
   if (!face.trimmed()) return;
   auto b = std::make_shared<Boundary>();
   const auto& curves = face.trim->curves();
+  // Chords no longer than 1/100 of the face's size keep the candidate search around a query small (a long
+  // straight edge would otherwise be a single chord and widen every query's reach).
+  const double max_chord = nurbs::bounding_box(face.surface).diagonal() / 100.0;
+  b->t.resize(curves.size());
   for (std::uint32_t c = 0; c < curves.size(); ++c) {
-    Point3 previous;
-    for (std::uint32_t k = 0; k < curves[c].t.size(); ++k) {
-      const Point3 uv = nurbs::evaluate(curves[c].uv, curves[c].t[k]);
-      const Point3 S = nurbs::evaluate(face.surface, uv.x(), uv.y());
-      if (k > 0) b->max_gap = std::max(b->max_gap, (S - previous).norm());
-      previous = S;
-      b->cloud.points.push_back(S);
+    const std::vector<double>& trim_t = curves[c].t;
+    std::vector<double>& t = b->t[c];
+    for (std::size_t k = 0; k < trim_t.size(); ++k) {
+      if (k > 0) {
+        const Point3 a = nurbs::evaluate(curves[c].uv, trim_t[k - 1]), z = nurbs::evaluate(curves[c].uv, trim_t[k]);
+        const double chord = (nurbs::evaluate(face.surface, a.x(), a.y()) - nurbs::evaluate(face.surface, z.x(), z.y())).norm();
+        const int pieces = std::clamp(static_cast<int>(std::ceil(chord / max_chord)), 1, 1000);
+        for (int m = 1; m < pieces; ++m) t.push_back(trim_t[k - 1] + (trim_t[k] - trim_t[k - 1]) * m / pieces);
+      }
+      t.push_back(trim_t[k]);
+    }
+    for (std::uint32_t k = 0; k < t.size(); ++k) {
+      const Point3 uv = nurbs::evaluate(curves[c].uv, t[k]);
+      b->cloud.points.push_back(nurbs::evaluate(face.surface, uv.x(), uv.y()));
       b->where.emplace_back(c, k);
+      b->gap.push_back(0.0);
+      if (k > 0) {
+        const std::size_t i = b->cloud.points.size() - 1;
+        const double chord = (b->cloud.points[i] - b->cloud.points[i - 1]).norm();
+        b->gap[i] = std::max(b->gap[i], chord);
+        b->gap[i - 1] = std::max(b->gap[i - 1], chord);
+        b->max_gap = std::max(b->max_gap, chord);
+      }
     }
   }
   b->tree = std::make_unique<SampleTree>(3, b->cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
@@ -125,7 +146,7 @@ TrimmedFaceLocator::TrimmedFaceLocator(const Face& face)
   boundary_ = std::move(b);
 }
 
-ClosestPointResult TrimmedFaceLocator::closest_point_on_boundary(const Point3& query) const {
+ClosestPointResult TrimmedFaceLocator::closest_point_on_boundary(const Point3& query, double limit) const {
   ClosestPointResult best;
   if (!boundary_ || boundary_->cloud.points.empty()) return best;
   const Boundary& b = *boundary_;
@@ -138,24 +159,22 @@ ClosestPointResult TrimmedFaceLocator::closest_point_on_boundary(const Point3& q
   // The nearest boundary point lies within one chord (along the curve) of some sample, which is then within
   // its distance plus that arc; 1.5 chords covers the arc's excess over the chord on curved boundaries.
   const double reach = std::sqrt(nearest_sq) + 1.5 * b.max_gap;
+  if (std::sqrt(nearest_sq) - 1.5 * b.max_gap > limit) return best;  // the boundary is farther than the limit
   thread_local std::vector<std::pair<std::uint32_t, double>> found;  // (sample, squared distance)
   nanoflann::RadiusResultSet<double, std::uint32_t> within(reach * reach, found);
   b.tree->findNeighbors(within, q, nanoflann::SearchParams());
-  std::sort(found.begin(), found.end());
+  // Nearest first, so that the best point found tightens the filter below early; ties by sample for determinism.
+  std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) {
+    return a.second < b.second || (a.second == b.second && a.first < b.first);
+  });
 
   const auto& curves = face_->trim->curves();
   CurvePoint best_point{0, 0, 0, std::numeric_limits<double>::infinity(), Point3::Zero()};
-  std::uint32_t last_curve = ~0u, last_sample = ~0u;
   for (const auto& [id, dist_sq] : found) {
     const auto [c, k] = b.where[id];
-    // Neighbouring samples of one curve refine over the same interval: skip the repeats.
-    if (c == last_curve && k == last_sample + 1) {
-      last_sample = k;
-      continue;
-    }
-    last_curve = c;
-    last_sample = k;
-    const std::vector<double>& t = curves[c].t;
+    // The arcs next to this sample are within its distance less its longest chord (1.5: arc over chord).
+    if (std::sqrt(dist_sq) - 1.5 * b.gap[id] > std::min(limit, std::sqrt(best_point.f))) continue;
+    const std::vector<double>& t = b.t[c];
     const double ta = t[k == 0 ? 0 : k - 1];
     const double tb = t[std::min<std::size_t>(k + 1, t.size() - 1)];
     const CurvePoint p = refine_on_curve(face_->surface, curves[c].uv, query, t[k], ta, tb);
@@ -169,12 +188,18 @@ ClosestPointResult TrimmedFaceLocator::closest_point_on_boundary(const Point3& q
   return best;
 }
 
-ClosestPointResult TrimmedFaceLocator::closest_point(const Point3& query, bool& on_trim_edge) const {
+ClosestPointResult TrimmedFaceLocator::closest_point(const Point3& query, double limit, bool& on_trim_edge) const {
   on_trim_edge = false;
-  if (!face_->trimmed()) return solver_.closest_point(query);
-  const ClosestPointResult edge = closest_point_on_boundary(query);
-  ClosestPointResult r = solver_.closest_point(query, edge);
-  on_trim_edge = r.u == edge.u && r.v == edge.v && r.distance == edge.distance;
+  // The limit enters the surface search as a bound that is not a point (u is NaN): cells farther are skipped.
+  ClosestPointResult bound;
+  bound.u = bound.v = std::numeric_limits<double>::quiet_NaN();
+  bound.distance = limit;
+  if (face_->trimmed()) {
+    const ClosestPointResult edge = closest_point_on_boundary(query, limit);
+    if (edge.distance < limit) bound = edge;
+  }
+  ClosestPointResult r = solver_.closest_point(query, bound);
+  on_trim_edge = face_->trimmed() && !none_nearer(r) && r.u == bound.u && r.v == bound.v && r.distance == bound.distance;
   return r;
 }
 
@@ -242,8 +267,7 @@ ModelPoint ModelLocator::closest_point(const Point3& query) const {
     best.status = ClosestPointStatus::NumericalError;
     return best;
   }
-  // Depth-first, nearer child first; a node is skipped when its box is farther than the best point (ties
-  // are kept so that the lower face index wins whatever the visiting order).
+  // Depth-first, nearer child first; a node is skipped when its box is farther than the best point.
   int stack[128];
   int top = 0;
   stack[top++] = 0;
@@ -255,7 +279,8 @@ ModelPoint ModelLocator::closest_point(const Point3& query) const {
         const int f = order_[static_cast<std::size_t>(k)];
         if (box_distance(boxes_[static_cast<std::size_t>(f)], query) > std::abs(best.distance)) continue;
         bool on_edge = false;
-        const ClosestPointResult r = faces_[static_cast<std::size_t>(f)]->closest_point(query, on_edge);
+        const ClosestPointResult r = faces_[static_cast<std::size_t>(f)]->closest_point(query, std::abs(best.distance), on_edge);
+        if (TrimmedFaceLocator::none_nearer(r)) continue;
         if (!r.ok()) {
           if (best.face < 0 && !std::isfinite(best.distance)) best.status = r.status;
           continue;

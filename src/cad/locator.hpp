@@ -3,6 +3,7 @@
 // hierarchy over the faces' control-net boxes (rigorous: a NURBS lies in its control points' convex hull)
 // means a query visits only the faces that could hold a closer point.
 
+#include <cmath>
 #include <memory>
 #include <span>
 #include <vector>
@@ -31,8 +32,12 @@ struct ModelPoint {
 class TrimmedFaceLocator {
  public:
   explicit TrimmedFaceLocator(const Face& face);
-  [[nodiscard]] nurbs::ClosestPointResult closest_point(const Point3& query, bool& on_trim_edge) const;
-  [[nodiscard]] nurbs::ClosestPointResult closest_point_on_boundary(const Point3& query) const;
+  // Only points nearer than `limit` are looked for (the best found so far on other faces); when there is
+  // none, the result has status NoneNearer.
+  [[nodiscard]] nurbs::ClosestPointResult closest_point(const Point3& query, double limit, bool& on_trim_edge) const;
+  [[nodiscard]] nurbs::ClosestPointResult closest_point_on_boundary(const Point3& query, double limit) const;
+  // Marks a result for "nothing on this face nearer than the limit".
+  [[nodiscard]] static bool none_nearer(const nurbs::ClosestPointResult& r) { return std::isnan(r.u); }
 
  private:
   struct Boundary;
@@ -49,7 +54,8 @@ class ModelLocator {
 
   [[nodiscard]] const Model& model() const { return *model_; }
   [[nodiscard]] ModelPoint closest_point(const Point3& query) const;
-  // One result per query, in order; parallel and deterministic (ties go to the lower face index).
+  // One result per query, in order; parallel and deterministic (faces are visited in an order fixed by the
+  // query alone, and of two faces at the same distance the one visited first is kept).
   [[nodiscard]] std::vector<ModelPoint> closest_points(std::span<const Point3> queries) const;
   // The outward unit normal of face `face` at (u, v).
   [[nodiscard]] Vector3 outward_normal(int face, double u, double v) const;

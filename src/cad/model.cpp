@@ -18,6 +18,9 @@
 #include <IGESData_GlobalSection.hxx>
 #include <IGESData_IGESEntity.hxx>
 #include <IGESData_IGESModel.hxx>
+#include <IGESData_IGESWriter.hxx>
+#include <IGESData_Protocol.hxx>
+#include <IGESSelect_WorkLibrary.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
@@ -306,6 +309,7 @@ Model read_model(const std::filesystem::path& path) {
       const TopoDS_Face nurbs_face = as_nurbs_face(original, type);
       Face face{index, face_name(transfer, original, format), type, face_surface(path, index, nurbs_face), nullptr, 1, false};
       face.trim = face_trim(nurbs_face, face.surface);
+      face.exact = type != "offset" && type != "other";
       face.outward = original.Orientation() == TopAbs_REVERSED ? -1 : 1;
       face.material_known = solid_faces.Contains(original);
       model.faces.push_back(std::move(face));
@@ -330,7 +334,13 @@ void write_surfaces(const std::filesystem::path& path, const std::vector<nurbs::
       IGESControl_Writer writer("MM", 0);
       for (const nurbs::Surface& s : surfaces) writer.AddGeom(occt::to_occt(s));
       writer.ComputeModel();
-      ok = writer.Write(tmp.c_str());
+      // OpenCASCADE's default real format keeps too few digits for a 1e-9 mm round trip; 17 significant digits
+      // reproduce every double exactly.
+      IGESData_IGESWriter iw(writer.Model());
+      iw.FloatWriter().SetFormat("%.16E");
+      iw.SendModel(IGESSelect_WorkLibrary::DefineProtocol());
+      std::ofstream out(tmp, std::ios::binary);
+      ok = iw.Print(out) && static_cast<bool>(out.flush());
     } else {
       BRep_Builder builder;
       TopoDS_Compound compound;

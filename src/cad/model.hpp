@@ -29,6 +29,9 @@ struct Face {
   std::shared_ptr<const Trim> trim;
   int outward = 1;              // +1: the outward normal (away from the material) is S_u × S_v; −1: opposite
   bool material_known = false;  // the face bounds a solid, so `outward` is the material side for certain
+  // The NURBS is the file's surface exactly (B-spline, Bézier and analytic faces); offset and other procedural
+  // surfaces are approximated by OpenCASCADE's conversion, to about its tolerance (1e-6 mm order).
+  bool exact = true;
 
   [[nodiscard]] bool trimmed() const { return trim != nullptr; }
 };

@@ -16,8 +16,7 @@ constexpr int kIsoCurves = 5;
 // A face may not receive more than this many points (a tiny spacing on a large face is a mistake).
 constexpr long kMaxPointsPerFace = 4'000'000;
 
-double longest_iso_length(const nurbs::Surface& s, bool along_u) {
-  const nurbs::Domain d = s.domain();
+double longest_iso_length(const nurbs::Surface& s, const nurbs::Domain& d, bool along_u) {
   double longest = 0.0;
   for (int c = 0; c < kIsoCurves; ++c) {
     const double fixed = along_u ? d.v0 + (d.v1 - d.v0) * c / (kIsoCurves - 1) : d.u0 + (d.u1 - d.u0) * c / (kIsoCurves - 1);
@@ -51,9 +50,14 @@ std::vector<PlannedPoint> plan_points(const Model& model, double spacing, const 
   std::vector<PlannedPoint> out;
   for (int f : chosen) {
     const Face& face = model.faces[static_cast<std::size_t>(f)];
-    const nurbs::Domain d = face.surface.domain();
-    const long nu = std::max(1L, std::lround(std::ceil(longest_iso_length(face.surface, true) / spacing)));
-    const long nv = std::max(1L, std::lround(std::ceil(longest_iso_length(face.surface, false) / spacing)));
+    // Over the trim's parameter box only: a small face may be cut from a very large surface.
+    nurbs::Domain d = face.surface.domain();
+    if (face.trimmed()) {
+      const nurbs::Domain t = face.trim->parameter_bounds();
+      d = {std::max(d.u0, t.u0), std::min(d.u1, t.u1), std::max(d.v0, t.v0), std::min(d.v1, t.v1)};
+    }
+    const long nu = std::max(1L, std::lround(std::ceil(longest_iso_length(face.surface, d, true) / spacing)));
+    const long nv = std::max(1L, std::lround(std::ceil(longest_iso_length(face.surface, d, false) / spacing)));
     if (nu * nv > kMaxPointsPerFace) {
       throw std::invalid_argument("spacing " + std::to_string(spacing) + " mm would put more than " +
                                   std::to_string(kMaxPointsPerFace) + " points on face " + std::to_string(f));

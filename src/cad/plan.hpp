@@ -15,7 +15,7 @@ struct PlannedPoint {
   double u, v;
 };
 
-// On each face, a grid of cell centres in (u, v) whose spacing along the surface is about `spacing` mm
+// On each face, a grid of cell centres in (u, v), over the trim's parameter box, whose spacing along the surface is about `spacing` mm
 // (estimated from the lengths of iso-curves; strongly non-uniform parametrisations give uneven spacing),
 // keeping the points inside the trim and with a defined normal. `faces` empty means every face.
 // Throws std::invalid_argument for a non-positive spacing or an unknown face index.

@@ -109,6 +109,18 @@ bool Trim::meets(const nurbs::Domain& box) const {
   return contains(0.5 * (box.u0 + box.u1), 0.5 * (box.v0 + box.v1));
 }
 
+nurbs::Domain Trim::parameter_bounds() const {
+  nurbs::Domain d{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                  std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  for (const Segment& s : segments_) {
+    d.u0 = std::min({d.u0, s.u0, s.u1});
+    d.u1 = std::max({d.u1, s.u0, s.u1});
+    d.v0 = std::min({d.v0, s.v0, s.v1});
+    d.v1 = std::max({d.v1, s.v0, s.v1});
+  }
+  return d;
+}
+
 double Trim::parameter_area() const {
   // Shoelace over all segments: in a valid B-rep, holes run opposite to the outer loop and subtract.
   double a = 0.0;

@@ -31,6 +31,8 @@ class Trim final : public nurbs::ParameterRegion {
 
   [[nodiscard]] const std::vector<BoundaryCurve>& curves() const { return curves_; }
   [[nodiscard]] bool empty() const { return curves_.empty(); }
+  // The smallest parameter box holding the boundary polygons.
+  [[nodiscard]] nurbs::Domain parameter_bounds() const;
   // The area enclosed in the parameter plane (holes subtracted).
   [[nodiscard]] double parameter_area() const;
 

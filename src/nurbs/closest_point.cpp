@@ -358,7 +358,11 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
       sd.radius[k] = r + kCellBoundFloor;
     }
   });
-  sd.max_radius = *std::max_element(sd.radius.begin(), sd.radius.end());
+  // Only cells that can be searched widen the seed query: a small face trimmed from a large surface keeps a
+  // small reach.
+  for (std::size_t k = 0; k < n; ++k) {
+    if (sd.in_region[k]) sd.max_radius = std::max(sd.max_radius, sd.radius[k]);
+  }
   sd.tree = std::make_unique<SeedTree>(3, sd.cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   sd.tree->buildIndex();
 }
@@ -402,13 +406,17 @@ struct CellSearch {
       const bool on_domain_edge = r.u == whole.u0 || r.u == whole.u1 || r.v == whole.v0 || r.v == whole.v1;
       r.status = on_domain_edge ? ClosestPointStatus::OnBoundary : ClosestPointStatus::Converged;
     }
+    // Outside the region (a trimmed face) the point does not count, and the cell is not split for it: the
+    // region's own boundary, searched by the caller, holds the minimum of the cell's part inside the region
+    // unless that part has an interior minimum of its own which Newton did not reach (accepted, rare).
+    if (region != nullptr && !region->contains(r.u, r.v)) return false;
     if (on_inner_edge && closer(r, best)) {
       // The minimum lies beyond the edge: follow it (f only decreases on the way).
       ClosestPointResult polished = refine_closest_point(surface, query, r.u, r.v, max_iterations);
       iterations += polished.iterations;
       if (region == nullptr || region->contains(polished.u, polished.v)) r = polished;
     }
-    if (closer(r, best) && (region == nullptr || region->contains(r.u, r.v))) best = r;
+    if (closer(r, best)) best = r;
     return on_inner_edge;
   }
 
@@ -421,6 +429,7 @@ struct CellSearch {
   void search_parts(const BezierPatch& patch, int depth) {
     for (const BezierPatch& half : split(patch, 0)) {
       for (const BezierPatch& quarter : split(half, 1)) {
+        if (region != nullptr && !region->meets(quarter.box)) continue;
         CellBox sub = frame;
         sub.enclose(origin, quarter.net);
         if (sub.lower_bound(query - origin) < best.distance) search(quarter, depth + 1);
@@ -469,7 +478,9 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   ClosestPointResult best = bound;
   int iterations = 0;
   int starts = 0;
-  if (sd.in_region[nearest]) search_cell(query, nearest, best, iterations, starts);
+  if (sd.in_region[nearest] && sd.box[nearest].lower_bound(query - sd.cloud.points[nearest]) < best.distance) {
+    search_cell(query, nearest, best, iterations, starts);
+  }
 
   // Every cell that could hold a closer point has its seed within best.distance + its radius: search that
   // ball, then visit each cell once unless its bounding box is already farther than the best point. The

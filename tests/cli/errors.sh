@@ -1,0 +1,33 @@
+#!/bin/sh
+# Bad input: one line on standard error naming the file or cause, a non-zero exit, no output file left behind.
+# Usage: errors.sh PROBECOMP CAD_DIR WORK_DIR
+set -u
+P=$1; CAD=$2; W=$3
+rm -rf "$W"; mkdir -p "$W"
+fail=0
+expect_error() {  # expect_error TEXT_IN_MESSAGE OUTPUT_FILE command...
+  text=$1; out=$2; shift 2
+  "$@" >"$W/stdout" 2>"$W/stderr"; rc=$?
+  lines=$(wc -l <"$W/stderr")
+  if [ $rc -eq 0 ]; then echo "FAIL (exit 0): $*"; fail=1; fi
+  if [ "$lines" -ne 1 ]; then echo "FAIL ($lines lines on stderr): $*"; cat "$W/stderr"; fail=1; fi
+  if ! grep -q -- "$text" "$W/stderr"; then echo "FAIL (no '$text' in message): $*"; cat "$W/stderr"; fail=1; fi
+  if [ -n "$out" ] && ls "$out"* >/dev/null 2>&1; then echo "FAIL (output left behind): $*"; fail=1; fi
+}
+printf 'x,y,z\n1,2,3\n' >"$W/good.csv"
+printf 'x,y,z\n1,2,3\n4,five,6\n' >"$W/bad_number.csv"
+printf 'x,y\n1,2\n' >"$W/no_z.csv"
+printf 'x,y,z\n1,2,nan\n' >"$W/nan.csv"
+printf 'x,y,z\n' >"$W/empty.csv"
+head -c 5000 "$CAD/asitus_wavy-cube.stp" >"$W/truncated.stp"
+expect_error "no such file" "" "$P" info "$W/missing.stp"
+expect_error "truncated.stp" "" "$P" info "$W/truncated.stp"
+expect_error "unknown CAD format" "" "$P" info "$W/good.csv"
+expect_error "bad_number.csv:3" "$W/out.csv" "$P" project --cad "$CAD/asitus_wavy-cube.stp" --points "$W/bad_number.csv" --output "$W/out.csv"
+expect_error "x, y and z" "$W/out.csv" "$P" project --cad "$CAD/asitus_wavy-cube.stp" --points "$W/no_z.csv" --output "$W/out.csv"
+expect_error "nan.csv:2" "$W/out.csv" "$P" project --cad "$CAD/asitus_wavy-cube.stp" --points "$W/nan.csv" --output "$W/out.csv"
+expect_error "no points" "$W/out.csv" "$P" project --cad "$CAD/asitus_wavy-cube.stp" --points "$W/empty.csv" --output "$W/out.csv"
+expect_error "truncated" "$W/out.csv" "$P" project --cad "$W/truncated.stp" --points "$W/good.csv" --output "$W/out.csv"
+expect_error "does not exist" "$W/plan.csv" "$P" plan "$CAD/asitus_wavy-cube.stp" --spacing 0.1 --faces 99 --output "$W/plan.csv"
+expect_error "spacing" "$W/plan.csv" "$P" plan "$CAD/asitus_wavy-cube.stp" --spacing -1 --output "$W/plan.csv"
+exit $fail
