@@ -6,10 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Warray-bounds"
-#include <nanoflann.hpp>
-#pragma GCC diagnostic pop
+
+#include "nurbs/point_tree.hpp"
 
 namespace probecomp::cad {
 
@@ -22,19 +20,6 @@ namespace {
 constexpr double kEdgeStepTolerance = nurbs::kClosestPointStepTolerance;
 constexpr int kEdgeMaxIterations = 40;
 constexpr int kMaxHalvings = 30;
-
-struct SampleCloud {
-  std::vector<Point3> points;
-  [[nodiscard]] std::size_t kdtree_get_point_count() const { return points.size(); }
-  [[nodiscard]] double kdtree_get_pt(std::size_t i, std::size_t d) const { return points[i][static_cast<int>(d)]; }
-  template <class B>
-  bool kdtree_get_bbox(B&) const {
-    return false;
-  }
-};
-// nanoflann's L2 adaptor works with SQUARED distances: every distance it returns or takes is squared.
-using SampleTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, SampleCloud>, SampleCloud, 3,
-                                                       std::uint32_t>;
 
 struct CurvePoint {
   double t, u, v, f;  // f = |S(C(t)) − Q|²
@@ -98,12 +83,12 @@ bool closer(const ModelPoint& a, const ModelPoint& b) {
 }  // namespace
 
 struct TrimmedFaceLocator::Boundary {
-  SampleCloud cloud;
+  nurbs::PointCloud cloud;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> where;  // (curve, sample index) of each sample
   std::vector<double> gap;   // longest chord from each sample to a neighbouring sample, mm
   std::vector<std::vector<double>> t;  // sample parameters of each boundary curve
   double max_gap = 0.0;      // longest chord of all
-  std::unique_ptr<SampleTree> tree;
+  std::unique_ptr<nurbs::PointTree> tree;
 };
 
 TrimmedFaceLocator::TrimmedFaceLocator(const Face& face)
@@ -141,7 +126,7 @@ TrimmedFaceLocator::TrimmedFaceLocator(const Face& face)
       }
     }
   }
-  b->tree = std::make_unique<SampleTree>(3, b->cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  b->tree = std::make_unique<nurbs::PointTree>(3, b->cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   b->tree->buildIndex();
   boundary_ = std::move(b);
 }

@@ -7,11 +7,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
-// GCC 12 flags nanoflann's KNN insertion loop with -Warray-bounds for k = 1 although it checks capacity first.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Warray-bounds"
-#include <nanoflann.hpp>
-#pragma GCC diagnostic pop
+
+#include "nurbs/point_tree.hpp"
 
 namespace probecomp::nurbs {
 
@@ -169,20 +166,6 @@ ClosestPointResult refine_closest_point_in(const Surface& s, const Point3& P, do
 
 namespace {
 
-struct SeedCloud {
-  std::vector<Point3> points;
-  [[nodiscard]] std::size_t kdtree_get_point_count() const { return points.size(); }
-  [[nodiscard]] double kdtree_get_pt(std::size_t idx, std::size_t dim) const { return points[idx][static_cast<int>(dim)]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox&) const {
-    return false;
-  }
-};
-
-// nanoflann's L2 adaptor works with SQUARED distances: every distance it returns or takes is squared.
-using SeedTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, SeedCloud>, SeedCloud, 3,
-                                                     std::uint32_t>;
-
 // The cells along one parameter direction: `per_span` equal sub-cells in each knot span.
 struct CellAxis {
   std::vector<double> breaks;  // distinct knots
@@ -280,12 +263,12 @@ struct ClosestPointSolver::Seeds {
   explicit Seeds(Surface refined) : bezier(std::move(refined)) {}
   CellAxis axis_u, axis_v;
   Surface bezier;  // the surface refined so that cell (i, j) has control points i·p .. i·p+p by j·q .. j·q+q
-  SeedCloud cloud;
+  PointCloud cloud;
   std::vector<double> u, v, radius;  // radius: largest distance from the seed to its cell's control points
   std::vector<CellBox> box;
   std::vector<char> in_region;  // the cell meets the region (all cells without one)
   double max_radius = 0.0;
-  std::unique_ptr<SeedTree> tree;
+  std::unique_ptr<PointTree> tree;
 };
 
 namespace {
@@ -363,7 +346,7 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
   for (std::size_t k = 0; k < n; ++k) {
     if (sd.in_region[k]) sd.max_radius = std::max(sd.max_radius, sd.radius[k]);
   }
-  sd.tree = std::make_unique<SeedTree>(3, sd.cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  sd.tree = std::make_unique<PointTree>(3, sd.cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   sd.tree->buildIndex();
 }
 
