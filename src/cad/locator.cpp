@@ -74,12 +74,6 @@ double box_distance(const BoundingBox& b, const Point3& q) {
   return std::sqrt(gap.square().sum());
 }
 
-bool closer(const ModelPoint& a, const ModelPoint& b) {
-  const double da = std::abs(a.distance), db = std::abs(b.distance);
-  if (da != db) return da < db;
-  return a.face < b.face;
-}
-
 }  // namespace
 
 struct TrimmedFaceLocator::Boundary {
@@ -103,27 +97,35 @@ TrimmedFaceLocator::TrimmedFaceLocator(const Face& face)
   for (std::uint32_t c = 0; c < curves.size(); ++c) {
     const std::vector<double>& trim_t = curves[c].t;
     std::vector<double>& t = b->t[c];
-    for (std::size_t k = 0; k < trim_t.size(); ++k) {
-      if (k > 0) {
-        const Point3 a = nurbs::evaluate(curves[c].uv, trim_t[k - 1]), z = nurbs::evaluate(curves[c].uv, trim_t[k]);
-        const double chord = (nurbs::evaluate(face.surface, a.x(), a.y()) - nurbs::evaluate(face.surface, z.x(), z.y())).norm();
-        const int pieces = std::clamp(static_cast<int>(std::ceil(chord / max_chord)), 1, 1000);
-        for (int m = 1; m < pieces; ++m) t.push_back(trim_t[k - 1] + (trim_t[k] - trim_t[k - 1]) * m / pieces);
-      }
-      t.push_back(trim_t[k]);
-    }
-    for (std::uint32_t k = 0; k < t.size(); ++k) {
-      const Point3 uv = nurbs::evaluate(curves[c].uv, t[k]);
-      b->cloud.points.push_back(nurbs::evaluate(face.surface, uv.x(), uv.y()));
-      b->where.emplace_back(c, k);
+    auto point_at = [&](double tk) {
+      const Point3 uv = nurbs::evaluate(curves[c].uv, tk);
+      return nurbs::evaluate(face.surface, uv.x(), uv.y());
+    };
+    auto add_sample = [&](double tk, const Point3& S) {
+      t.push_back(tk);
+      b->cloud.points.push_back(S);
+      b->where.emplace_back(c, static_cast<std::uint32_t>(t.size() - 1));
       b->gap.push_back(0.0);
-      if (k > 0) {
+      if (t.size() > 1) {
         const std::size_t i = b->cloud.points.size() - 1;
         const double chord = (b->cloud.points[i] - b->cloud.points[i - 1]).norm();
         b->gap[i] = std::max(b->gap[i], chord);
         b->gap[i - 1] = std::max(b->gap[i - 1], chord);
         b->max_gap = std::max(b->max_gap, chord);
       }
+    };
+    Point3 previous = Point3::Zero();
+    for (std::size_t k = 0; k < trim_t.size(); ++k) {
+      const Point3 S = point_at(trim_t[k]);
+      if (k > 0) {
+        const int pieces = std::clamp(static_cast<int>(std::ceil((S - previous).norm() / max_chord)), 1, 1000);
+        for (int m = 1; m < pieces; ++m) {
+          const double tm = trim_t[k - 1] + (trim_t[k] - trim_t[k - 1]) * m / pieces;
+          add_sample(tm, point_at(tm));
+        }
+      }
+      add_sample(trim_t[k], S);
+      previous = S;
     }
   }
   b->tree = std::make_unique<nurbs::PointTree>(3, b->cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
@@ -280,7 +282,7 @@ ModelPoint ModelLocator::closest_point(const Point3& query) const {
         m.on_trim_edge = on_edge;
         const double side = (query - r.point).dot(m.normal);
         m.distance = side < 0.0 ? -r.distance : r.distance;
-        if (best.face < 0 || closer(m, best)) best = m;
+        best = m;  // the face was asked only for points nearer than the best so far
       }
       continue;
     }

@@ -83,25 +83,34 @@ void check_file_frame(const std::filesystem::path& path, Format format) {
   if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not a CAD file");
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot be opened for reading");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (text.empty()) fail(path, "is empty");
+  // Only the first and last few kilobytes carry the frame; OpenCASCADE reads the whole file afterwards.
+  constexpr std::streamoff kFrameBytes = 4096;
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size <= 0) fail(path, "is empty");
+  auto read_at = [&](std::streamoff offset, std::streamoff count) {
+    std::string bytes(static_cast<std::size_t>(count), '\0');
+    in.seekg(offset);
+    in.read(bytes.data(), count);
+    return bytes;
+  };
+  const std::string head = read_at(0, std::min(size, kFrameBytes));
+  const std::string tail = read_at(std::max<std::streamoff>(0, size - kFrameBytes), std::min(size, kFrameBytes));
   auto last_line = [&] {
-    std::size_t end = text.find_last_not_of(" \t\r\n");
+    const std::size_t end = tail.find_last_not_of(" \t\r\n");
     if (end == std::string::npos) return std::string();
-    std::size_t begin = text.rfind('\n', end);
-    return text.substr(begin == std::string::npos ? 0 : begin + 1, end + 1 - (begin == std::string::npos ? 0 : begin + 1));
+    const std::size_t newline = tail.rfind('\n', end);
+    const std::size_t begin = newline == std::string::npos ? 0 : newline + 1;
+    return tail.substr(begin, end + 1 - begin);
   };
   if (format == Format::Step) {
-    const std::size_t start = text.find_first_not_of(" \t\r\n");
-    if (start == std::string::npos || text.compare(start, 13, "ISO-10303-21;") != 0) fail(path, "not a STEP file (no ISO-10303-21 header)");
-    if (text.find("END-ISO-10303-21;", text.size() > 4096 ? text.size() - 4096 : 0) == std::string::npos) {
-      fail(path, "truncated STEP file (no END-ISO-10303-21; at the end)");
-    }
+    const std::size_t start = head.find_first_not_of(" \t\r\n");
+    if (start == std::string::npos || head.compare(start, 13, "ISO-10303-21;") != 0) fail(path, "not a STEP file (no ISO-10303-21 header)");
+    if (tail.find("END-ISO-10303-21;") == std::string::npos) fail(path, "truncated STEP file (no END-ISO-10303-21; at the end)");
   } else {
     // IGES: fixed 80-column records, the section letter in column 73; the first record is in S (start) or,
     // rarely, G; the last is the T (terminate) record.
-    const std::size_t eol = text.find('\n');
-    const std::string first = text.substr(0, eol);
+    const std::string first = head.substr(0, head.find('\n'));
     if (first.size() < 73 || (first[72] != 'S' && first[72] != 'G')) fail(path, "not an IGES file (no start section)");
     const std::string last = last_line();
     if (last.size() < 73 || last[72] != 'T') fail(path, "truncated IGES file (no terminate section at the end)");

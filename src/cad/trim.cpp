@@ -52,15 +52,15 @@ Trim::Trim(std::vector<BoundaryCurve> curves) : curves_(std::move(curves)) {
     }
   }
   if (segments_.empty()) return;
-  double v_max = -std::numeric_limits<double>::infinity();
   v_min_ = std::numeric_limits<double>::infinity();
+  v_max_ = -std::numeric_limits<double>::infinity();
   for (const Segment& s : segments_) {
     v_min_ = std::min({v_min_, s.v0, s.v1});
-    v_max = std::max({v_max, s.v0, s.v1});
+    v_max_ = std::max({v_max_, s.v0, s.v1});
   }
   // About 8 segments per band on average keeps a membership test at a few dozen crossings.
   const int n_bands = std::clamp(static_cast<int>(segments_.size() / 8), 1, 4096);
-  band_height_ = std::max((v_max - v_min_) / n_bands, std::numeric_limits<double>::min());
+  band_height_ = std::max((v_max_ - v_min_) / n_bands, std::numeric_limits<double>::min());
   bands_.assign(static_cast<std::size_t>(n_bands), {});
   for (std::uint32_t i = 0; i < segments_.size(); ++i) {
     const Segment& s = segments_[i];
@@ -72,12 +72,10 @@ Trim::Trim(std::vector<BoundaryCurve> curves) : curves_(std::move(curves)) {
 
 bool Trim::contains(double u, double v) const {
   if (segments_.empty()) return true;
-  const int band = static_cast<int>(std::floor((v - v_min_) / band_height_));
-  if (band < 0 || band >= static_cast<int>(bands_.size())) {
-    // v = v_max lies on the top edge of the last band.
-    if (band != static_cast<int>(bands_.size()) || v > v_min_ + band_height_ * bands_.size()) return false;
-  }
-  const auto& ids = bands_[static_cast<std::size_t>(std::min<int>(band, static_cast<int>(bands_.size()) - 1))];
+  if (!(v >= v_min_ && v <= v_max_)) return false;
+  // v = v_max lies on the top edge of the last band.
+  const int band = std::min(static_cast<int>((v - v_min_) / band_height_), static_cast<int>(bands_.size()) - 1);
+  const auto& ids = bands_[static_cast<std::size_t>(band)];
   // Even-odd rule with a ray towards +u; half-open in v so a ray through a vertex counts it once.
   bool inside = false;
   for (std::uint32_t i : ids) {

@@ -43,7 +43,7 @@ class Trim final : public nurbs::ParameterRegion {
   std::vector<BoundaryCurve> curves_;
   std::vector<Segment> segments_;
   // Segments grouped by horizontal band of v, so a membership test only crosses the segments of its band.
-  double v_min_ = 0.0, band_height_ = 1.0;
+  double v_min_ = 0.0, v_max_ = 0.0, band_height_ = 1.0;
   std::vector<std::vector<std::uint32_t>> bands_;
 };
 
