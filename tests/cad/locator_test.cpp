@@ -6,11 +6,6 @@
 #include <BRepExtrema_DistShapeShape.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
-#include <IGESControl_Controller.hxx>
-#include <IGESControl_Reader.hxx>
-#include <STEPControl_Reader.hxx>
-#include <TopExp_Explorer.hxx>
-#include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -19,25 +14,12 @@
 
 #include "cad/locator.hpp"
 #include "cad/plan.hpp"
+#include "support/occt_files.hpp"
 
 namespace probecomp::cad {
 namespace {
 
 const std::filesystem::path kCadDir = PROBECOMP_TEST_CAD_DIR;
-
-TopoDS_Shape occt_shape(const std::filesystem::path& path) {
-  if (path.extension() == ".stp") {
-    STEPControl_Reader reader;
-    reader.ReadFile(path.c_str());
-    reader.TransferRoots();
-    return reader.OneShape();
-  }
-  IGESControl_Controller::Init();
-  IGESControl_Reader reader;
-  reader.ReadFile(path.c_str());
-  reader.TransferRoots();
-  return reader.OneShape();
-}
 
 // Points around the model: planned points pushed off along the normal by up to ±3 mm and sideways by up to
 // 2 mm, so that many feet land on trim edges and on neighbouring faces.
@@ -69,16 +51,13 @@ TEST_P(ProjectOnCadFile, EqualsOpenCascadeExhaustiveDistanceInsideTrims) {
   const std::filesystem::path path = kCadDir / GetParam();
   const Model model = read_model(path);
   const ModelLocator locator(model);
-  const TopoDS_Shape shape = occt_shape(path);
+  const TopoDS_Shape shape = testing::read_with_occt(path);
   // The reference is the faces alone: some files also hold free curves and points, which are not surfaces.
-  std::vector<TopoDS_Face> faces;
+  const std::vector<TopoDS_Face> faces = testing::faces_of(shape);
   TopoDS_Compound all_faces;
   BRep_Builder builder;
   builder.MakeCompound(all_faces);
-  for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
-    faces.push_back(TopoDS::Face(e.Current()));
-    builder.Add(all_faces, e.Current());
-  }
+  for (const TopoDS_Face& f : faces) builder.Add(all_faces, f);
 
   const std::vector<Point3> queries = points_around(model, 150, 11);
   const std::vector<ModelPoint> ours = locator.closest_points(queries);

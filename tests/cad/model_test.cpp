@@ -4,11 +4,6 @@
 #include <BRepGProp_Face.hxx>
 #include <BRep_Tool.hxx>
 #include <GeomAPI_ProjectPointOnSurf.hxx>
-#include <IGESControl_Controller.hxx>
-#include <IGESControl_Reader.hxx>
-#include <STEPControl_Reader.hxx>
-#include <TopExp_Explorer.hxx>
-#include <TopoDS.hxx>
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -16,6 +11,7 @@
 
 #include "cad/model.hpp"
 #include "occt/convert.hpp"
+#include "support/occt_files.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace probecomp::cad {
@@ -37,22 +33,7 @@ const CadFile kFiles[] = {
 
 // OpenCASCADE's own faces of the file, in explorer order (the order the model promises), in millimetres.
 std::vector<TopoDS_Face> occt_faces(const std::filesystem::path& path) {
-  TopoDS_Shape shape;
-  if (path.extension() == ".stp") {
-    STEPControl_Reader reader;
-    EXPECT_EQ(reader.ReadFile(path.c_str()), IFSelect_RetDone);
-    reader.TransferRoots();
-    shape = reader.OneShape();
-  } else {
-    IGESControl_Controller::Init();
-    IGESControl_Reader reader;
-    EXPECT_EQ(reader.ReadFile(path.c_str()), IFSelect_RetDone);
-    reader.TransferRoots();
-    shape = reader.OneShape();
-  }
-  std::vector<TopoDS_Face> faces;
-  for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) faces.push_back(TopoDS::Face(e.Current()));
-  return faces;
+  return testing::faces_of(testing::read_with_occt(path));
 }
 
 class EveryCadFile : public ::testing::TestWithParam<CadFile> {};
