@@ -133,23 +133,33 @@ TrimmedFaceLocator::TrimmedFaceLocator(const Face& face)
   boundary_ = std::move(b);
 }
 
+std::vector<Point3> TrimmedFaceLocator::sample_points() const {
+  std::vector<Point3> out = solver_.seed_points_in_region();
+  if (boundary_) out.insert(out.end(), boundary_->cloud.points.begin(), boundary_->cloud.points.end());
+  return out;
+}
+
 ClosestPointResult TrimmedFaceLocator::closest_point_on_boundary(const Point3& query, double limit) const {
   ClosestPointResult best;
   if (!boundary_ || boundary_->cloud.points.empty()) return best;
   const Boundary& b = *boundary_;
   const double q[3] = {query.x(), query.y(), query.z()};
-  std::uint32_t nearest = 0;
-  double nearest_sq = 0.0;  // squared (nanoflann)
-  nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(1);
-  knn.init(&nearest, &nearest_sq);
-  b.tree->findNeighbors(knn, q, nanoflann::SearchParams());
   // The nearest boundary point lies within one chord (along the curve) of some sample, which is then within
-  // its distance plus that arc; 1.5 chords covers the arc's excess over the chord on curved boundaries.
-  const double reach = std::sqrt(nearest_sq) + 1.5 * b.max_gap;
-  if (std::sqrt(nearest_sq) - 1.5 * b.max_gap > limit) return best;  // the boundary is farther than the limit
+  // its distance plus that arc; 1.5 chords covers the arc's excess over the chord on curved boundaries. Given
+  // a limit, only samples within it plus that margin matter; without one, the nearest sample fixes the reach.
+  double reach = limit + 1.5 * b.max_gap;
+  if (!std::isfinite(limit)) {
+    std::uint32_t nearest = 0;
+    double nearest_sq = 0.0;  // squared (nanoflann)
+    nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(1);
+    knn.init(&nearest, &nearest_sq);
+    b.tree->findNeighbors(knn, q, nanoflann::SearchParams());
+    reach = std::sqrt(nearest_sq) + 1.5 * b.max_gap;
+  }
   thread_local std::vector<std::pair<std::uint32_t, double>> found;  // (sample, squared distance)
   nanoflann::RadiusResultSet<double, std::uint32_t> within(reach * reach, found);
   b.tree->findNeighbors(within, q, nanoflann::SearchParams());
+  if (found.empty()) return best;
   // Nearest first, so that the best point found tightens the filter below early; ties by sample for determinism.
   std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) {
     return a.second < b.second || (a.second == b.second && a.first < b.first);
@@ -190,6 +200,12 @@ ClosestPointResult TrimmedFaceLocator::closest_point(const Point3& query, double
   return r;
 }
 
+struct ModelLocator::Samples {
+  nurbs::PointCloud cloud;
+  std::vector<int> face;  // the face each sample lies on
+  std::unique_ptr<nurbs::PointTree> tree;
+};
+
 ModelLocator::ModelLocator(const Model& model) : model_(&model) {
   const std::size_t n = model.faces.size();
   faces_.resize(n);
@@ -201,6 +217,15 @@ ModelLocator::ModelLocator(const Model& model) : model_(&model) {
   order_.resize(n);
   std::iota(order_.begin(), order_.end(), 0);
   if (n > 0) build(0, static_cast<int>(n));
+  samples_ = std::make_unique<Samples>();
+  for (std::size_t k = 0; k < n; ++k) {
+    for (const Point3& p : faces_[k]->sample_points()) {
+      samples_->cloud.points.push_back(p);
+      samples_->face.push_back(static_cast<int>(k));
+    }
+  }
+  samples_->tree = std::make_unique<nurbs::PointTree>(3, samples_->cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  samples_->tree->buildIndex();
 }
 
 ModelLocator::~ModelLocator() = default;
@@ -246,15 +271,29 @@ Vector3 ModelLocator::outward_normal(int face, double u, double v) const {
   return static_cast<double>(f.outward) * n.n;
 }
 
-ModelPoint ModelLocator::closest_point(const Point3& query) const {
-  ModelPoint best;
-  best.distance = std::numeric_limits<double>::infinity();
-  if (nodes_.empty()) return best;
-  if (!query.allFinite()) {
-    best.status = ClosestPointStatus::NumericalError;
-    return best;
+void ModelLocator::visit_face(const Point3& query, int f, ModelPoint& best) const {
+  if (box_distance(boxes_[static_cast<std::size_t>(f)], query) > std::abs(best.distance)) return;
+  bool on_edge = false;
+  const ClosestPointResult r = faces_[static_cast<std::size_t>(f)]->closest_point(query, std::abs(best.distance), on_edge);
+  if (TrimmedFaceLocator::none_nearer(r)) return;
+  if (!r.ok()) {
+    if (best.face < 0) best.status = r.status;
+    return;
   }
-  // Depth-first, nearer child first; a node is skipped when its box is farther than the best point.
+  ModelPoint m;
+  m.status = r.status;
+  m.face = f;
+  m.u = r.u;
+  m.v = r.v;
+  m.point = r.point;
+  m.normal = outward_normal(f, r.u, r.v);
+  m.on_trim_edge = on_edge;
+  const double side = (query - r.point).dot(m.normal);
+  m.distance = side < 0.0 ? -r.distance : r.distance;
+  best = m;  // the face was asked only for points nearer than the best so far
+}
+
+void ModelLocator::search(const Point3& query, ModelPoint& best, int searched) const {
   int stack[128];
   int top = 0;
   stack[top++] = 0;
@@ -264,25 +303,7 @@ ModelPoint ModelLocator::closest_point(const Point3& query) const {
     if (node.left < 0) {
       for (int k = node.first; k < node.first + node.count; ++k) {
         const int f = order_[static_cast<std::size_t>(k)];
-        if (box_distance(boxes_[static_cast<std::size_t>(f)], query) > std::abs(best.distance)) continue;
-        bool on_edge = false;
-        const ClosestPointResult r = faces_[static_cast<std::size_t>(f)]->closest_point(query, std::abs(best.distance), on_edge);
-        if (TrimmedFaceLocator::none_nearer(r)) continue;
-        if (!r.ok()) {
-          if (best.face < 0 && !std::isfinite(best.distance)) best.status = r.status;
-          continue;
-        }
-        ModelPoint m;
-        m.status = r.status;
-        m.face = f;
-        m.u = r.u;
-        m.v = r.v;
-        m.point = r.point;
-        m.normal = outward_normal(f, r.u, r.v);
-        m.on_trim_edge = on_edge;
-        const double side = (query - r.point).dot(m.normal);
-        m.distance = side < 0.0 ? -r.distance : r.distance;
-        best = m;  // the face was asked only for points nearer than the best so far
+        if (f != searched) visit_face(query, f, best);
       }
       continue;
     }
@@ -292,6 +313,37 @@ ModelPoint ModelLocator::closest_point(const Point3& query) const {
     stack[top++] = left_first ? node.right : node.left;
     stack[top++] = left_first ? node.left : node.right;
   }
+}
+
+ModelPoint ModelLocator::closest_point(const Point3& query) const {
+  ModelPoint best;
+  best.distance = std::numeric_limits<double>::infinity();
+  if (nodes_.empty()) return best;
+  if (!query.allFinite()) {
+    best.status = ClosestPointStatus::NumericalError;
+    return best;
+  }
+  if (!samples_->cloud.points.empty()) {
+    // The nearest sample lies on its face, inside the trim: that face holds a point at most this far, so it
+    // is searched first, and every other face only for points nearer than what it gives. The margin keeps
+    // the sample's own point (a cell centre, where Newton starts) from being lost to rounding.
+    const double q[3] = {query.x(), query.y(), query.z()};
+    std::uint32_t nearest = 0;
+    double nearest_sq = 0.0;  // squared (nanoflann)
+    nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(1);
+    knn.init(&nearest, &nearest_sq);
+    samples_->tree->findNeighbors(knn, q, nanoflann::SearchParams());
+    const int first = samples_->face[nearest];
+    best.distance = std::sqrt(nearest_sq) * (1.0 + 1e-12) + 1e-12;
+    visit_face(query, first, best);
+    search(query, best, first);
+    if (best.face >= 0) return best;
+    best = ModelPoint{};
+    best.distance = std::numeric_limits<double>::infinity();
+  }
+  // No face found a point within the sample's distance (Newton left the trim, a rare case the face's own
+  // search accepts): search without the bound.
+  search(query, best, -1);
   return best;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 // Closest point on a CAD model ("find nominals"): over all faces, inside their trims. A bounding-volume
 // hierarchy over the faces' control-net boxes (rigorous: a NURBS lies in its control points' convex hull)
-// means a query visits only the faces that could hold a closer point.
+// means a query visits only the faces that could hold a closer point; the nearest of all faces' sample
+// points (a k-d tree) gives the first face to search and a tight bound before the hierarchy is walked.
 
 #include <cmath>
 #include <memory>
@@ -36,6 +37,8 @@ class TrimmedFaceLocator {
   // none, the result has status NoneNearer.
   [[nodiscard]] nurbs::ClosestPointResult closest_point(const Point3& query, double limit, bool& on_trim_edge) const;
   [[nodiscard]] nurbs::ClosestPointResult closest_point_on_boundary(const Point3& query, double limit) const;
+  // Points of the face (inside its trim): seeds and boundary samples, for a model-wide first guess.
+  [[nodiscard]] std::vector<Point3> sample_points() const;
   // Marks a result for "nothing on this face nearer than the limit".
   [[nodiscard]] static bool none_nearer(const nurbs::ClosestPointResult& r) { return std::isnan(r.u); }
 
@@ -67,12 +70,18 @@ class ModelLocator {
     int first = 0, count = 0;   // the leaf's faces: order_[first .. first + count)
   };
   int build(int first, int count);
+  // Depth-first over the BVH, nearer child first, each face (but `searched`, already asked) asked only for
+  // points nearer than `best`.
+  void search(const Point3& query, ModelPoint& best, int searched) const;
+  void visit_face(const Point3& query, int f, ModelPoint& best) const;
+  struct Samples;
 
   const Model* model_;
   std::vector<std::unique_ptr<TrimmedFaceLocator>> faces_;
   std::vector<BoundingBox> boxes_;
   std::vector<int> order_;
   std::vector<Node> nodes_;
+  std::unique_ptr<Samples> samples_;  // every face's sample points in one k-d tree
 };
 
 }  // namespace probecomp::cad

@@ -356,6 +356,15 @@ ClosestPointSolver& ClosestPointSolver::operator=(ClosestPointSolver&&) noexcept
 
 std::size_t ClosestPointSolver::seed_count() const { return seeds_->cloud.points.size(); }
 
+std::vector<Point3> ClosestPointSolver::seed_points_in_region() const {
+  const Seeds& sd = *seeds_;
+  std::vector<Point3> out;
+  for (std::size_t k = 0; k < sd.cloud.points.size(); ++k) {
+    if (region_ == nullptr || (sd.in_region[k] && region_->contains(sd.u[k], sd.v[k]))) out.push_back(sd.cloud.points[k]);
+  }
+  return out;
+}
+
 namespace {
 
 // How often a cell may be split in four when Newton inside it stops on one of its inner edges while its
@@ -451,24 +460,29 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
     return bad;
   }
   const double q[3] = {query.x(), query.y(), query.z()};
-
-  std::uint32_t nearest = 0;
-  double nearest_dist_sq = 0.0;  // squared (nanoflann)
-  nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(1);
-  knn.init(&nearest, &nearest_dist_sq);
-  sd.tree->findNeighbors(knn, q, nanoflann::SearchParams());
-
   ClosestPointResult best = bound;
   int iterations = 0;
   int starts = 0;
-  if (sd.in_region[nearest] && sd.box[nearest].lower_bound(query - sd.cloud.points[nearest]) < best.distance) {
-    search_cell(query, nearest, best, iterations, starts);
+
+  // Without a bound, Newton first runs in the nearest seed's cell so that the ball searched below is small.
+  // With one (the best point on other faces, or a trimmed face's boundary), the ball is already known and
+  // the nearest candidate comes first anyway.
+  double seed_bound = std::numeric_limits<double>::infinity();
+  std::uint32_t nearest = std::numeric_limits<std::uint32_t>::max();
+  if (!std::isfinite(best.distance)) {
+    double nearest_dist_sq = 0.0;  // squared (nanoflann)
+    nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(1);
+    knn.init(&nearest, &nearest_dist_sq);
+    sd.tree->findNeighbors(knn, q, nanoflann::SearchParams());
+    if (sd.in_region[nearest] && sd.box[nearest].lower_bound(query - sd.cloud.points[nearest]) < best.distance) {
+      search_cell(query, nearest, best, iterations, starts);
+    }
+    // The nearest seed bounds the distance only when it lies on the searched surface (no region).
+    if (region_ == nullptr) seed_bound = std::sqrt(nearest_dist_sq);
   }
 
   // Every cell that could hold a closer point has its seed within best.distance + its radius: search that
-  // ball, then visit each cell once unless its bounding box is already farther than the best point. The
-  // nearest seed bounds the distance only when it lies on the searched surface (no region).
-  const double seed_bound = region_ == nullptr ? std::sqrt(nearest_dist_sq) : std::numeric_limits<double>::infinity();
+  // ball, then visit each cell once unless its bounding box is already farther than the best point.
   const double reach = std::min(best.distance, seed_bound) + sd.max_radius;
   thread_local std::vector<std::pair<std::uint32_t, double>> candidates;  // (seed, squared distance)
   nanoflann::RadiusResultSet<double, std::uint32_t> within(reach * reach, candidates);

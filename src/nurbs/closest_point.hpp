@@ -84,6 +84,9 @@ class ClosestPointSolver {
 
   [[nodiscard]] const Surface& surface() const { return surface_; }
   [[nodiscard]] std::size_t seed_count() const;
+  // The seeds (cell centres, points of the surface) that lie inside the region: each is an upper bound on a
+  // query's distance to the region.
+  [[nodiscard]] std::vector<Point3> seed_points_in_region() const;
 
   [[nodiscard]] ClosestPointResult closest_point(const Point3& query) const;
   // The closer of `bound` (a point already known, e.g. the nearest point of a trimmed face's boundary) and
