@@ -443,7 +443,10 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, Close
   // The cell's Bézier net is gathered only when the cell has to be split, which is rare.
   CellSearch search{surface_, query, sd.box[k], sd.cloud.points[k], region_, options_.max_iterations, best};
   const Domain cell{sd.axis_u.lower(cu), sd.axis_u.upper(cu), sd.axis_v.lower(cv), sd.axis_v.upper(cv)};
-  if (search.run(cell)) search.search_parts(cell_patch(sd.bezier, sd.axis_u, sd.axis_v, cu, cv), 0);
+  // Newton may have found a closer point beyond the cell's edge, which can put the whole cell out of reach.
+  if (search.run(cell) && sd.box[k].lower_bound(query - sd.cloud.points[k]) < best.distance) {
+    search.search_parts(cell_patch(sd.bezier, sd.axis_u, sd.axis_v, cu, cv), 0);
+  }
   iterations += search.iterations;
   starts += search.starts;
 }
