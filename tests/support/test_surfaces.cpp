@@ -42,11 +42,15 @@ nurbs::Surface random_rational_surface(std::uint64_t seed, const RandomSurfaceSp
   return nurbs::Surface(std::move(U), std::move(V), P, W);
 }
 
-nurbs::Surface freeform_panel(std::uint64_t seed, int n) {
+nurbs::Surface freeform_panel(std::uint64_t seed, int n, bool uniform_knots) {
   std::mt19937_64 rng(seed);
   constexpr int p = 3;
   nurbs::KnotVector U = random_knots(rng, p, n, false);
   nurbs::KnotVector V = random_knots(rng, p, n, false);
+  if (uniform_knots) {
+    U = nurbs::KnotVector::uniform(p, n - p);
+    V = nurbs::KnotVector::uniform(p, n - p);
+  }
   std::uniform_real_distribution<double> w(0.8, 1.25);
   std::uniform_real_distribution<double> phase(0.0, 2.0 * std::numbers::pi);
   const double a = phase(rng), b = phase(rng);

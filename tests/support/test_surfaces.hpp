@@ -23,7 +23,9 @@ struct RandomSurfaceSpec {
 
 // A smooth free-form panel like a body or blade surface: n × n control points over 200 × 200 mm, heights from
 // two crossing waves (about ±25 mm), random non-uniform knots, weights in [0.8, 1.25]. Degree 3 × 3.
-[[nodiscard]] nurbs::Surface freeform_panel(std::uint64_t seed, int n = 20);
+// Random knots under evenly spaced control points make creases of radius down to about 2 mm; with uniform
+// knots the panel bends no tighter than its waves (radius about 20 mm), like a designed part surface.
+[[nodiscard]] nurbs::Surface freeform_panel(std::uint64_t seed, int n = 20, bool uniform_knots = false);
 
 // A two-turn Archimedean spiral sheet (radius 10 mm growing 6 mm per turn), 64 cubic spans along the spiral,
 // extruded 30 mm in z (degree 1). Neighbouring sheets are 6 mm apart.

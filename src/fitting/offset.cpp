@@ -1,0 +1,225 @@
+#include "fitting/offset.hpp"
+
+#include <tbb/blocked_range2d.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "fitting/least_squares.hpp"
+#include "nurbs/knot_insertion.hpp"
+
+namespace probecomp::fitting {
+
+const char* to_string(OffsetResult::Status s) {
+  switch (s) {
+    case OffsetResult::Status::OK: return "ok";
+    case OffsetResult::Status::ToleranceNotReached: return "tolerance-not-reached";
+    case OffsetResult::Status::FoldsOver: return "folds-over";
+    case OffsetResult::Status::Degenerate: return "degenerate";
+  }
+  return "unknown";
+}
+
+namespace {
+
+using nurbs::Surface;
+
+// Refinement stops (the tolerance not reached) rather than grow the offset beyond this many control points:
+// a surface that needs more is not smooth enough for its offset to be approximated (e.g. a C⁰ crease).
+constexpr double kMaxControlPoints = 250'000;
+
+// `per_span` parameters in each knot span at its start and equal steps, and the domain's end.
+std::vector<double> span_parameters(const std::vector<double>& breaks, int per_span) {
+  std::vector<double> t;
+  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
+    for (int m = 0; m < per_span; ++m) t.push_back(breaks[s] + (breaks[s + 1] - breaks[s]) * m / per_span);
+  }
+  t.push_back(breaks.back());
+  return t;
+}
+
+// `per_span` parameters inside each span, at the middles of equal steps (never on a sample), with their span.
+std::vector<std::pair<double, int>> check_parameters(const std::vector<double>& breaks, int per_span) {
+  std::vector<std::pair<double, int>> t;
+  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
+    for (int m = 0; m < per_span; ++m) {
+      t.emplace_back(breaks[s] + (breaks[s + 1] - breaks[s]) * (m + 0.5) / per_span, static_cast<int>(s));
+    }
+  }
+  return t;
+}
+
+struct TrueOffset {
+  Point3 point;
+  Vector3 normal = Vector3::Zero();  // n of S, which is also the offset's normal
+  double towards = 0.0;  // the largest principal curvature of S on the offset side (signed: > 0 bends towards it)
+  double offset_curvature = 0.0;  // the offset's largest absolute principal curvature, |k / (1 − d·k)|
+  bool degenerate = false;
+};
+
+// S + d·n and S's principal curvatures from its fundamental forms (with II from n = S_u × S_v / |…|, a
+// principal curvature k > 0 means S bends towards n; the offset's metric scales by 1 − d·k, which vanishes
+// where the offset folds).
+TrueOffset true_offset(const Surface& s, double d, double u, double v) {
+  const nurbs::UnitNormal un = nurbs::unit_normal(s, u, v);
+  TrueOffset out;
+  if (un.status == nurbs::UnitNormal::Status::Degenerate) {
+    out.degenerate = true;
+    return out;
+  }
+  const nurbs::SurfaceD2 sd = nurbs::derivatives_d2(s, u, v);
+  out.point = sd.S + d * un.n;
+  out.normal = un.n;
+  const double E = sd.Su.dot(sd.Su), F = sd.Su.dot(sd.Sv), G = sd.Sv.dot(sd.Sv);
+  const double L = sd.Suu.dot(un.n), M = sd.Suv.dot(un.n), N = sd.Svv.dot(un.n);
+  const double det = E * G - F * F;
+  if (!(det > 0.0)) return out;  // a pole: the curvature there is the neighbourhood's, checked around it
+  const double K = (L * N - M * M) / det;
+  const double H = (E * N - 2.0 * F * M + G * L) / (2.0 * det);
+  const double root = std::sqrt(std::max(H * H - K, 0.0));
+  out.towards = d >= 0.0 ? H + root : -(H - root);
+  for (const double k : {H + root, H - root}) {
+    out.offset_curvature = std::max(out.offset_curvature, std::abs(k / (1.0 - d * k)));
+  }
+  return out;
+}
+
+// How far the true offset point O lies from the fitted surface F, from the difference e = F(u,v) − O at the
+// same parameters: its component along the normal, plus what a tangential slip |e_t| adds on a surface of
+// curvature k (k·|e_t|²/2). The parametric gap |e| would also count the slip itself, which moves the point
+// along the surface and leaves the shape alone.
+double geometric_gap(const Vector3& e, const TrueOffset& o) {
+  const double along = e.dot(o.normal);
+  const double slip_sq = std::max(e.squaredNorm() - along * along, 0.0);
+  return std::abs(along) + 0.5 * o.offset_curvature * slip_sq;
+}
+
+// The midpoints of the flagged spans, sorted.
+std::vector<double> midpoints(const std::vector<double>& breaks, const std::vector<char>& flagged) {
+  std::vector<double> X;
+  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
+    if (flagged[s]) X.push_back(0.5 * (breaks[s] + breaks[s + 1]));
+  }
+  return X;
+}
+
+// Knots to insert once more so that the fit can follow the offset's continuity: n depends on S's first
+// derivatives, so where S is C^k (a knot of multiplicity p − k) S + d·n is only C^(k−1). A spline with S's own
+// continuity there approaches that at O(h²) per halving of the spans around it, not O(h^(p+1)); measured on a
+// bicubic 20 × 20 panel offset by 1 mm: 0.12 mm with S's knots, and a factor 4 per round of refinement.
+std::vector<double> continuity_knots(const nurbs::KnotVector& U) {
+  std::vector<double> X;
+  const std::vector<double> breaks = U.breakpoints();
+  for (std::size_t k = 1; k + 1 < breaks.size(); ++k) {
+    if (U.multiplicity(breaks[k]) < U.degree()) X.push_back(breaks[k]);
+  }
+  return X;
+}
+
+}  // namespace
+
+OffsetResult offset_surface(const Surface& s, double d, const OffsetOptions& options) {
+  OffsetResult result{.status = OffsetResult::Status::Degenerate, .surface = s};
+  result.min_radius_towards_offset = std::numeric_limits<double>::infinity();
+  // S with the knots inserted so far (the same shape): the fit's knots and weights. The first fit keeps S's
+  // own knots, which hold exact offsets (planes, cylinders, spheres: S + d·n is then a NURBS with them).
+  Surface base = s;
+
+  for (int round = 0; round < options.max_rounds; ++round) {
+    const std::vector<double> bu = base.U().breakpoints();
+    const std::vector<double> bv = base.V().breakpoints();
+    // Enough samples per span that the fit is determined even for one span of high degree.
+    const int per_u = std::max(options.samples_per_span, (base.num_u() + static_cast<int>(bu.size()) - 1) /
+                                                             static_cast<int>(bu.size() - 1));
+    const int per_v = std::max(options.samples_per_span, (base.num_v() + static_cast<int>(bv.size()) - 1) /
+                                                             static_cast<int>(bv.size() - 1));
+    const std::vector<double> tu = span_parameters(bu, per_u);
+    const std::vector<double> tv = span_parameters(bv, per_v);
+    std::vector<Point3> points(tu.size() * tv.size());
+    std::vector<SurfaceParameter> params(points.size());
+    std::vector<char> bad(points.size(), 0);
+    tbb::parallel_for(std::size_t{0}, tu.size(), [&](std::size_t a) {
+      for (std::size_t b = 0; b < tv.size(); ++b) {
+        const std::size_t k = a * tv.size() + b;
+        const TrueOffset o = true_offset(s, d, tu[a], tv[b]);
+        points[k] = o.point;
+        params[k] = {tu[a], tv[b]};
+        bad[k] = o.degenerate;
+      }
+    });
+    if (std::any_of(bad.begin(), bad.end(), [](char c) { return c != 0; })) {
+      result.status = OffsetResult::Status::Degenerate;
+      return result;
+    }
+    const FitResult fit = fit_control_points(base, points, params);
+    ++result.rounds;
+    if (!fit.ok()) {
+      result.status = OffsetResult::Status::Degenerate;
+      return result;
+    }
+    result.surface = fit.surface;
+
+    // The check grid: the deviation and the curvature towards the offset at each point.
+    const auto cu = check_parameters(bu, options.checks_per_span);
+    const auto cv = check_parameters(bv, options.checks_per_span);
+    std::vector<double> deviation(cu.size() * cv.size());
+    std::vector<double> towards(deviation.size());
+    tbb::parallel_for(std::size_t{0}, cu.size(), [&](std::size_t a) {
+      for (std::size_t b = 0; b < cv.size(); ++b) {
+        const std::size_t k = a * cv.size() + b;
+        const TrueOffset o = true_offset(s, d, cu[a].first, cv[b].first);
+        deviation[k] = o.degenerate ? std::numeric_limits<double>::infinity()
+                                    : geometric_gap(nurbs::evaluate(fit.surface, cu[a].first, cv[b].first) - o.point, o);
+        towards[k] = o.towards;
+      }
+    });
+    std::vector<char> flag_u(bu.size() - 1, 0), flag_v(bv.size() - 1, 0);
+    result.deviation = 0.0;
+    double max_towards = 0.0;
+    for (std::size_t a = 0; a < cu.size(); ++a) {
+      for (std::size_t b = 0; b < cv.size(); ++b) {
+        const std::size_t k = a * cv.size() + b;
+        result.deviation = std::max(result.deviation, deviation[k]);
+        if (!(deviation[k] <= options.tolerance)) {
+          flag_u[static_cast<std::size_t>(cu[a].second)] = 1;
+          flag_v[static_cast<std::size_t>(cv[b].second)] = 1;
+        }
+        if (towards[k] > max_towards) {
+          max_towards = towards[k];
+          result.at_u = cu[a].first;
+          result.at_v = cv[b].first;
+        }
+      }
+    }
+    result.min_radius_towards_offset = max_towards > 0.0 ? 1.0 / max_towards : std::numeric_limits<double>::infinity();
+    if (result.min_radius_towards_offset <= std::abs(d)) {
+      result.status = OffsetResult::Status::FoldsOver;
+      return result;
+    }
+    if (result.deviation <= options.tolerance) {
+      result.status = OffsetResult::Status::OK;
+      return result;
+    }
+    if (round + 1 == options.max_rounds) break;
+    if (static_cast<double>(base.num_u()) * base.num_v() > kMaxControlPoints) break;
+    std::vector<double> xu = midpoints(bu, flag_u);
+    std::vector<double> xv = midpoints(bv, flag_v);
+    if (round == 0) {
+      const std::vector<double> ku = continuity_knots(base.U());
+      const std::vector<double> kv = continuity_knots(base.V());
+      xu.insert(xu.end(), ku.begin(), ku.end());
+      xv.insert(xv.end(), kv.begin(), kv.end());
+      std::sort(xu.begin(), xu.end());
+      std::sort(xv.begin(), xv.end());
+    }
+    if (!xu.empty()) base = nurbs::refine_knots_u(base, xu);
+    if (!xv.empty()) base = nurbs::refine_knots_v(base, xv);
+    result.knots_inserted += static_cast<int>(xu.size() + xv.size());
+  }
+  result.status = OffsetResult::Status::ToleranceNotReached;
+  return result;
+}
+
+}  // namespace probecomp::fitting
