@@ -1,0 +1,69 @@
+#pragma once
+// Least-squares surface fit refined where the data demand it (DESIGN.md §2 steps 4–5): fit the control points,
+// correct the points' parameters by projecting them on the fit, estimate the measurement noise robustly from
+// the residuals, and insert knots in the spans whose residuals the noise does not explain; repeat until every
+// span is consistent with the noise, the data can support no more control points, or the rounds run out.
+
+#include <span>
+#include <vector>
+
+#include "fitting/least_squares.hpp"
+
+namespace probecomp::fitting {
+
+struct AdaptiveFitOptions {
+  FitOptions fit;
+  int max_rounds = 8;             // knot insertions at most
+  int parameter_corrections = 2;  // projections of the points on the fit, each followed by a refit, per round
+  // Residuals below this count as noise whatever the estimate (noise-free or almost noise-free data), mm. A
+  // tenth of a micrometre: below what a CMM resolves.
+  double noise_floor = 1e-4;
+  // A span is refined when the sum of its squared residuals, over σ², exceeds the χ² quantile that noise alone
+  // exceeds in any span of the surface with this probability (split evenly over the spans, so that hundreds of
+  // small spans do not raise false alarms by their number).
+  double false_alarm = 0.01;
+  int min_points_to_split = 8;  // a span with fewer points is not split (its quarters would hold one or none)
+  double min_points_per_control_point = 4.0;  // refinement stops before the fit has fewer
+};
+
+struct AdaptiveFitResult {
+  enum class Status {
+    OK,               // every span's residuals are consistent with the noise estimate
+    NoiseNotReached,  // stopped (data support or rounds) with `spans_above_noise` spans still unexplained
+    NotDone,          // bad input (see fit_control_points)
+    NumericalError,
+  };
+  Status status = Status::NotDone;
+  nurbs::Surface surface;
+  std::vector<SurfaceParameter> params{};  // each point's foot point on the fit
+  std::vector<double> residuals{};       // signed distance of each point from the fit along its normal, mm
+  int control_points = 0;
+  int rounds = 0;            // knot insertions made
+  int knots_inserted = 0;    // in u and v together
+  double rms = 0.0;          // of the residuals (weighted), mm
+  double max_residual = 0.0; // largest |residual| over points with weight > 0, mm
+  double noise_sigma = 0.0;  // robust estimate of the measurement noise, mm
+  int spans_above_noise = 0;
+
+  [[nodiscard]] bool ok() const { return status == Status::OK; }
+};
+
+// `start` gives degrees, knots and weights, the first iterate and the regularisation's target (the nominal or
+// offset surface); `params` the points' starting parameters on it (e.g. from registration).
+[[nodiscard]] AdaptiveFitResult fit_surface(const nurbs::Surface& start, std::span<const Point3> points,
+                                            std::span<const SurfaceParameter> params,
+                                            std::span<const double> weights = {},
+                                            const AdaptiveFitOptions& options = {});
+
+// Each point's foot point on `s`, by Newton from its parameters (the point's parameter is kept where Newton
+// does not converge). Parallel, deterministic.
+[[nodiscard]] std::vector<SurfaceParameter> correct_parameters(const nurbs::Surface& s, std::span<const Point3> points,
+                                                               std::span<const SurfaceParameter> params);
+
+// The noise standard deviation from residuals: 1.4826 × their median absolute deviation (consistent for
+// Gaussian noise, unmoved by a minority of unexplained residuals), divided by √(1 − unknowns / points) for the
+// part of the noise the fit absorbs. Points with zero weight are left out.
+[[nodiscard]] double robust_noise_sigma(std::span<const double> residuals, std::span<const double> weights,
+                                        int unknowns_per_coordinate);
+
+}  // namespace probecomp::fitting

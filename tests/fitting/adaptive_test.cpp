@@ -1,0 +1,153 @@
+// fit_surface (refinement, parameter correction, noise estimate) against a known truth that the nominal knots
+// cannot follow: a free-form patch with a small dent.
+
+#include "fitting/adaptive.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "nurbs/closest_point.hpp"
+#include "support/test_surfaces.hpp"
+
+namespace probecomp::fitting {
+namespace {
+
+using nurbs::Surface;
+
+// A 100 × 100 mm rational bicubic patch, 8 × 8 control points on uniform knots, heights from two gentle waves
+// (curvature radius above 50 mm), weights 0.9–1.1.
+Surface nominal_patch() {
+  std::vector<Point3> P;
+  std::vector<double> w;
+  for (int i = 0; i < 8; ++i) {
+    for (int j = 0; j < 8; ++j) {
+      const double x = 100.0 * i / 7, y = 100.0 * j / 7;
+      P.emplace_back(x, y, 4.0 * std::sin(x / 25.0) + 3.0 * std::cos(y / 30.0 + 0.4));
+      w.push_back(1.0 + 0.1 * std::sin(1.3 * i + 0.7 * j));
+    }
+  }
+  return Surface(nurbs::KnotVector::uniform(3, 5), nurbs::KnotVector::uniform(3, 5), P, w);
+}
+
+// The truth: the nominal pushed in along its normal by a dent 3 mm wide and `depth` deep (cos² profile, slopes
+// up to about 17° for 0.3 mm) about S(0.43, 0.57).
+struct DentedPart {
+  Surface nominal = nominal_patch();
+  Point3 centre = nurbs::evaluate(nominal, 0.43, 0.57);
+  double depth = 0.3, half_width = 1.5;
+
+  [[nodiscard]] Point3 at(double u, double v) const {
+    const Point3 S = nurbs::evaluate(nominal, u, v);
+    const double r = (S - centre).norm();
+    const double c = r < half_width ? std::cos(0.5 * std::numbers::pi * r / half_width) : 0.0;
+    return S - depth * c * c * nurbs::unit_normal(nominal, u, v).n;
+  }
+};
+
+struct Data {
+  std::vector<Point3> points;
+  std::vector<SurfaceParameter> params;
+};
+
+// An n × n grid of parameters (a scan), the truth there plus Gaussian noise along the nominal normal; the
+// parameters are the nominal foot points, as registration gives them.
+Data scan(const DentedPart& part, int n, double sigma, std::uint64_t seed, double u_max = 1.0) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma);
+  Data d;
+  for (int a = 0; a < n; ++a) {
+    for (int b = 0; b < n; ++b) {
+      const double u = u_max * a / (n - 1), v = static_cast<double>(b) / (n - 1);
+      d.points.push_back(part.at(u, v) + noise(rng) * nurbs::unit_normal(part.nominal, u, v).n);
+      d.params.push_back({u, v});
+    }
+  }
+  return d;
+}
+
+// Largest distance from the noise-free truth to the fitted surface on an m × m grid between the scan lines.
+double worst_gap_to_truth(const DentedPart& part, const Surface& fit, int m, double u_max = 1.0) {
+  double worst = 0.0;
+  for (int a = 0; a < m; ++a) {
+    for (int b = 0; b < m; ++b) {
+      const double u = u_max * (a + 0.5) / m, v = (b + 0.5) / m;
+      const nurbs::ClosestPointResult r = nurbs::refine_closest_point(fit, part.at(u, v), u, v);
+      EXPECT_TRUE(r.ok());
+      worst = std::max(worst, r.distance);
+    }
+  }
+  return worst;
+}
+
+TEST(FitSurface, ADentTheNominalKnotsCannotFollowIsRefinedUntilTheResidualsAreNoise) {
+  const DentedPart part;
+  constexpr double sigma = 0.005;
+  const Data data = scan(part, 250, sigma, 1);  // 0.4 mm spacing, 62 500 points
+  // Without refinement the dent stays in the residuals.
+  const FitResult plain = fit_control_points(part.nominal, data.points, data.params);
+  ASSERT_TRUE(plain.ok());
+  EXPECT_GT(plain.max_residual, 0.1);
+
+  const AdaptiveFitResult fit = fit_surface(part.nominal, data.points, data.params);
+  EXPECT_EQ(fit.status, AdaptiveFitResult::Status::OK)
+      << "spans above noise " << fit.spans_above_noise << ", rounds " << fit.rounds << ", control points "
+      << fit.control_points << ", rms " << fit.rms << ", sigma " << fit.noise_sigma << ", max " << fit.max_residual;
+  EXPECT_GT(fit.rounds, 0);
+  EXPECT_NEAR(fit.rms, sigma, 0.1 * sigma) << fit.control_points << " control points";
+  EXPECT_NEAR(fit.noise_sigma, sigma, 0.1 * sigma);
+  const double gap = worst_gap_to_truth(part, fit.surface, 300);
+  EXPECT_LE(gap, 3.0 * sigma);
+  RecordProperty("worst_gap_to_truth_um", std::to_string(gap * 1000.0));
+  RecordProperty("rms_um", std::to_string(fit.rms * 1000.0));
+  RecordProperty("noise_sigma_um", std::to_string(fit.noise_sigma * 1000.0));
+  RecordProperty("control_points", fit.control_points);
+  RecordProperty("rounds", fit.rounds);
+}
+
+TEST(FitSurface, NoRefinementWhereTheNominalKnotsAlreadyExplainTheData) {
+  DentedPart part;
+  part.depth = 0.0;
+  constexpr double sigma = 0.005;
+  const Data data = scan(part, 100, sigma, 2);
+  const AdaptiveFitResult fit = fit_surface(part.nominal, data.points, data.params);
+  ASSERT_TRUE(fit.ok());
+  EXPECT_EQ(fit.rounds, 0);
+  EXPECT_EQ(fit.control_points, 64);
+  EXPECT_NEAR(fit.noise_sigma, sigma, 0.1 * sigma);
+  EXPECT_LE(worst_gap_to_truth(part, fit.surface, 50), 3.0 * sigma);
+}
+
+TEST(FitSurface, DataOnHalfThePatchWithTheDentFitThatHalf) {
+  const DentedPart part;
+  constexpr double sigma = 0.005;
+  const Data data = scan(part, 250, sigma, 3, 0.5);  // u ≤ 0.5 holds the dent (u = 0.43)
+  const AdaptiveFitResult fit = fit_surface(part.nominal, data.points, data.params);
+  ASSERT_TRUE(fit.ok()) << fit.spans_above_noise;
+  EXPECT_NEAR(fit.rms, sigma, 0.1 * sigma);
+  EXPECT_LE(worst_gap_to_truth(part, fit.surface, 200, 0.5), 3.0 * sigma);
+}
+
+TEST(FitSurface, SparseDataStopRefinementAndSaySo) {
+  const DentedPart part;
+  const Data data = scan(part, 30, 0.005, 4);  // 3.4 mm spacing: the dent falls between scan lines
+  AdaptiveFitOptions options;
+  options.max_rounds = 20;
+  const AdaptiveFitResult fit = fit_surface(part.nominal, data.points, data.params, {}, options);
+  EXPECT_NE(fit.status, AdaptiveFitResult::Status::NotDone);
+  EXPECT_LE(fit.control_points * options.min_points_per_control_point, 900.0);
+}
+
+TEST(RobustNoiseSigma, IgnoresAMinorityOfLargeResiduals) {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<double> r(20000);
+  for (double& x : r) x = noise(rng);
+  for (std::size_t k = 0; k < r.size(); k += 20) r[k] = 0.5;  // 5 % outliers
+  EXPECT_NEAR(robust_noise_sigma(r, {}, 0), 0.01, 0.0008);
+}
+
+}  // namespace
+}  // namespace probecomp::fitting
