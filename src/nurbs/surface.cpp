@@ -130,10 +130,15 @@ UnitNormal unit_normal(const Surface& s, double u, double v) {
   // |S_u × S_v| below this fraction of |S_u||S_v| (sine of the angle between the tangents) counts as
   // vanishing: at 1e-10 the normal's direction is still good to about 1e-6 rad from rounding alone.
   constexpr double kParallelTangents = 1e-10;
+  // A tangent shorter than this fraction of the other is a collapsed edge's (a pole's) to rounding: its
+  // direction is noise (the edge's coincident control points differ in their last bits), so S_u × S_v is
+  // meaningless there even when not small. Points this close to a pole are given its limit normal.
+  constexpr double kCollapsedTangent = 1e-7;
   const SurfaceD1 d = derivatives_d1(s, u, v);
   Vector3 n = d.Su.cross(d.Sv);
   const double scale = d.Su.norm() * d.Sv.norm();
-  if (n.norm() > kParallelTangents * scale && n.norm() > 0.0) return {UnitNormal::Status::OK, n.normalized()};
+  const bool collapsed = std::min(d.Su.norm(), d.Sv.norm()) <= kCollapsedTangent * std::max(d.Su.norm(), d.Sv.norm());
+  if (!collapsed && n.norm() > kParallelTangents * scale && n.norm() > 0.0) return {UnitNormal::Status::OK, n.normalized()};
 
   // At a collapsed edge one tangent vanishes; the normal is its limit from inside the domain. If S_u = 0 along
   // the edge v = v0, then S_u(u, v0 + δ) ≈ δ·S_uv and the limit of S_u × S_v is the direction of δ·S_uv × S_v
