@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fitting/spans.hpp"
 #include "nurbs/closest_point.hpp"
 
 namespace probecomp::fitting {
@@ -31,14 +32,6 @@ std::vector<double> normal_residuals(const Surface& s, std::span<const Point3> p
     }
   });
   return r;
-}
-
-std::vector<double> midpoints(const std::vector<double>& breaks, const std::vector<char>& flagged) {
-  std::vector<double> X;
-  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
-    if (flagged[s]) X.push_back(0.5 * (breaks[s] + breaks[s + 1]));
-  }
-  return X;
 }
 
 // The upper quantile z with P(N(0,1) > z) = alpha (Abramowitz and Stegun 26.2.23, error below 4.5e-4).
@@ -169,8 +162,8 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       result.status = AdaptiveFitResult::Status::OK;
       return result;
     }
-    const std::vector<double> xu = midpoints(bu, flag_u);
-    const std::vector<double> xv = midpoints(bv, flag_v);
+    const std::vector<double> xu = flagged_span_midpoints(bu, flag_u);
+    const std::vector<double> xv = flagged_span_midpoints(bv, flag_v);
     const double after = static_cast<double>(current.num_u() + static_cast<int>(xu.size())) *
                          static_cast<double>(current.num_v() + static_cast<int>(xv.size()));
     if (round == options.max_rounds || (xu.empty() && xv.empty()) ||

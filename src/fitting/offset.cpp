@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "fitting/least_squares.hpp"
+#include "fitting/spans.hpp"
 #include "nurbs/knot_insertion.hpp"
 
 namespace probecomp::fitting {
@@ -94,15 +95,6 @@ double geometric_gap(const Vector3& e, const TrueOffset& o) {
   const double along = e.dot(o.normal);
   const double slip_sq = std::max(e.squaredNorm() - along * along, 0.0);
   return std::abs(along) + 0.5 * o.offset_curvature * slip_sq;
-}
-
-// The midpoints of the flagged spans, sorted.
-std::vector<double> midpoints(const std::vector<double>& breaks, const std::vector<char>& flagged) {
-  std::vector<double> X;
-  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
-    if (flagged[s]) X.push_back(0.5 * (breaks[s] + breaks[s + 1]));
-  }
-  return X;
 }
 
 // Knots to insert once more so that the fit can follow the offset's continuity: n depends on S's first
@@ -204,8 +196,8 @@ OffsetResult offset_surface(const Surface& s, double d, const OffsetOptions& opt
     }
     if (round + 1 == options.max_rounds) break;
     if (static_cast<double>(base.num_u()) * base.num_v() > kMaxControlPoints) break;
-    std::vector<double> xu = midpoints(bu, flag_u);
-    std::vector<double> xv = midpoints(bv, flag_v);
+    std::vector<double> xu = flagged_span_midpoints(bu, flag_u);
+    std::vector<double> xv = flagged_span_midpoints(bv, flag_v);
     if (round == 0) {
       const std::vector<double> ku = continuity_knots(base.U());
       const std::vector<double> kv = continuity_knots(base.V());

@@ -1,0 +1,19 @@
+#pragma once
+// Knot-span helpers shared by the refining fitters (offset_surface, fit_surface).
+
+#include <vector>
+
+namespace probecomp::fitting {
+
+// The midpoints of the spans between consecutive breakpoints that are flagged (flagged[s] for span s), in
+// order: the knots that halve them.
+[[nodiscard]] inline std::vector<double> flagged_span_midpoints(const std::vector<double>& breaks,
+                                                                const std::vector<char>& flagged) {
+  std::vector<double> X;
+  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
+    if (flagged[s]) X.push_back(0.5 * (breaks[s] + breaks[s + 1]));
+  }
+  return X;
+}
+
+}  // namespace probecomp::fitting
