@@ -280,6 +280,10 @@ void ModelLocator::visit_face(const Point3& query, int f, ModelPoint& best) cons
     if (best.face < 0) best.status = r.status;
     return;
   }
+  best = make_point(query, f, r, on_edge);  // the face was asked only for points nearer than the best so far
+}
+
+ModelPoint ModelLocator::make_point(const Point3& query, int f, const ClosestPointResult& r, bool on_edge) const {
   ModelPoint m;
   m.status = r.status;
   m.face = f;
@@ -290,7 +294,7 @@ void ModelLocator::visit_face(const Point3& query, int f, ModelPoint& best) cons
   m.on_trim_edge = on_edge;
   const double side = (query - r.point).dot(m.normal);
   m.distance = side < 0.0 ? -r.distance : r.distance;
-  best = m;  // the face was asked only for points nearer than the best so far
+  return m;
 }
 
 void ModelLocator::search(const Point3& query, ModelPoint& best, int searched) const {
@@ -345,6 +349,31 @@ ModelPoint ModelLocator::closest_point(const Point3& query) const {
   // search accepts): search without the bound.
   search(query, best, -1);
   return best;
+}
+
+ModelPoint ModelLocator::closest_point(const Point3& query, const ModelPoint& hint, HintedSearch mode) const {
+  if (!hint.ok() || hint.face < 0 || hint.face >= static_cast<int>(faces_.size()) || !query.allFinite()) {
+    return closest_point(query);
+  }
+  const Face& face = model_->faces[static_cast<std::size_t>(hint.face)];
+  const ClosestPointResult local = nurbs::refine_closest_point(face.surface, query, hint.u, hint.v);
+  if (!local.ok() || (face.trimmed() && !face.trim->contains(local.u, local.v))) return closest_point(query);
+  // The local foot point bounds the answer. Its own face is searched again for anything strictly nearer
+  // (another minimum, or its trim boundary), then every other face the hierarchy cannot rule out.
+  ModelPoint best = make_point(query, hint.face, local, false);
+  if (mode == HintedSearch::Exact) visit_face(query, hint.face, best);
+  search(query, best, hint.face);
+  return best;
+}
+
+std::vector<ModelPoint> ModelLocator::closest_points(std::span<const Point3> queries, std::span<const ModelPoint> hints,
+                                                     HintedSearch mode) const {
+  if (hints.size() != queries.size()) return closest_points(queries);
+  std::vector<ModelPoint> out(queries.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, queries.size(), 64), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) out[i] = closest_point(queries[i], hints[i], mode);
+  });
+  return out;
 }
 
 std::vector<ModelPoint> ModelLocator::closest_points(std::span<const Point3> queries) const {

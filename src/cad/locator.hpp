@@ -60,6 +60,18 @@ class ModelLocator {
   // One result per query, in order; parallel and deterministic (faces are visited in an order fixed by the
   // query alone, and of two faces at the same distance the one visited first is kept).
   [[nodiscard]] std::vector<ModelPoint> closest_points(std::span<const Point3> queries) const;
+  // Searches that start from a hint: this point's foot before a small motion, as in an ICP iteration. Newton
+  // from the hint's (u, v) on its face gives a tight bound first.
+  //   Exact  then the global search visits only the cells and faces that could hold a nearer point: the same
+  //          answer as without a hint, found faster;
+  //   Local  the hint's face is not searched again (another minimum on it, or its trim boundary, would be
+  //          missed), the other faces are: for the iterations of ICP that a final exact pass confirms.
+  // A hint that is not ok, or whose Newton leaves the face's trim, gives an unhinted search.
+  enum class HintedSearch { Exact, Local };
+  [[nodiscard]] ModelPoint closest_point(const Point3& query, const ModelPoint& hint,
+                                         HintedSearch search = HintedSearch::Exact) const;
+  [[nodiscard]] std::vector<ModelPoint> closest_points(std::span<const Point3> queries, std::span<const ModelPoint> hints,
+                                                       HintedSearch search = HintedSearch::Exact) const;
   // The outward unit normal of face `face` at (u, v).
   [[nodiscard]] Vector3 outward_normal(int face, double u, double v) const;
 
@@ -74,6 +86,7 @@ class ModelLocator {
   // points nearer than `best`.
   void search(const Point3& query, ModelPoint& best, int searched) const;
   void visit_face(const Point3& query, int f, ModelPoint& best) const;
+  [[nodiscard]] ModelPoint make_point(const Point3& query, int f, const nurbs::ClosestPointResult& r, bool on_edge) const;
   struct Samples;
 
   const Model* model_;

@@ -1,10 +1,13 @@
-// probecomp command-line tool: info, project and plan on CAD models; later work adds compensate, demo, study.
+// probecomp command-line tool: info, project and plan on CAD models, the paper's studies; later work adds
+// compensate and demo.
 // Every failure is one line on standard error ("probecomp: FILE:LINE: cause") and exit status 1; output files
 // are written whole or not at all.
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <sstream>
 #include <string>
@@ -14,6 +17,7 @@
 #include "cad/model.hpp"
 #include "cad/plan.hpp"
 #include "io/point_table.hpp"
+#include "studies/registration_study.hpp"
 #include "version.hpp"
 
 namespace {
@@ -181,6 +185,101 @@ int run_plan(const std::string& part, double spacing, const std::string& face_li
   return 0;
 }
 
+registration::RegistrationOptions registration_options(const std::string& metric, const std::string& loss) {
+  registration::RegistrationOptions o;
+  o.metric = metric == "point-to-point" ? registration::Metric::PointToPoint : registration::Metric::PointToPlane;
+  o.robust.loss = loss == "none"      ? registration::RobustLoss::None
+                  : loss == "huber"   ? registration::RobustLoss::Huber
+                  : loss == "trimmed" ? registration::RobustLoss::Trimmed
+                                      : registration::RobustLoss::Cauchy;
+  return o;
+}
+
+std::string json_pose_error(const studies::PoseError& e) {
+  std::string out = "{";
+  for (std::size_t c = 0; c < 6; ++c) {
+    out += std::string(c ? ", " : "") + "\"" + studies::kPoseComponents[c] + "\": " + fmt("%.6e", e[c]);
+  }
+  return out + "}";
+}
+
+std::string json_statistics(const studies::ErrorStatistics& s) {
+  return "{\"std\": " + json_pose_error(s.std) + ", \"mean\": " + json_pose_error(s.mean) +
+         ", \"ci95\": " + json_pose_error(s.ci95) + "}";
+}
+
+int run_study_registration(const std::string& output_dir, const studies::RegistrationStudyOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const studies::RegistrationStudyResult r = studies::run_registration_study(options);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const studies::PaperTable1 paper = studies::paper_table1();
+
+  std::ostringstream t;
+  t << "Registration accuracy (paper §5.1, Table 1): cube corner of three 20 mm squares, " << r.points
+    << " points offset " << options.probe_radius << " mm along the normal, noise sigma " << options.noise << " mm,\n"
+    << options.trials << " random misalignments (+-" << options.max_translation << " mm, +-" << options.max_rotation
+    << " deg per axis); " << registration::to_string(options.registration.metric) << " ICP, "
+    << registration::to_string(options.registration.robust.loss) << " weights. Converged: proposed "
+    << r.proposed.converged << "/" << options.trials << ", conventional " << r.conventional.converged << "/"
+    << options.trials << ".\n"
+    << "Error = estimated minus true pose; rotations in degrees, translations in mm.\n\n";
+  char line[256];
+  std::snprintf(line, sizeof line, "%-24s %12s %12s %12s %12s %12s %12s\n", "", "rx (deg)", "ry (deg)", "rz (deg)",
+                "tx (mm)", "ty (mm)", "tz (mm)");
+  t << line;
+  auto row = [&](const char* label, const studies::PoseError& e, bool ours) {
+    std::snprintf(line, sizeof line, "%-24s", label);
+    t << line;
+    for (double v : e) {
+      std::snprintf(line, sizeof line, ours ? " %12.3e" : " %12.4f", v + 0.0);
+      t << line;
+    }
+    t << "\n";
+  };
+  const std::pair<const char*, studies::PoseError studies::ErrorStatistics::*> blocks[] = {
+      {"Standard deviation of the registration error", &studies::ErrorStatistics::std},
+      {"Mean registration error", &studies::ErrorStatistics::mean},
+      {"95 % confidence half-width of the mean (t.s/sqrt(n); the paper's row is about 0.62 x its std)",
+       &studies::ErrorStatistics::ci95}};
+  for (const auto& [title, member] : blocks) {
+    t << title << "\n";
+    row("  proposed (probecomp)", r.proposed.stats.*member, true);
+    row("  proposed (paper)", paper.proposed.*member, false);
+    row("  conventional (probecomp)", r.conventional.stats.*member, true);
+    row("  conventional (paper)", paper.conventional.*member, false);
+  }
+  t << "\n" << fmt("%.2f", seconds) << " s\n";
+  std::cout << t.str();
+
+  if (!output_dir.empty()) {
+    std::filesystem::create_directories(output_dir);
+    std::ostringstream j;
+    j << "{\"study\": \"registration\", \"units\": {\"rotation\": \"deg\", \"translation\": \"mm\"},\n"
+      << " \"trials\": " << options.trials << ", \"points\": " << r.points << ", \"noise_mm\": " << options.noise
+      << ", \"probe_radius_mm\": " << options.probe_radius << ", \"metric\": \""
+      << registration::to_string(options.registration.metric) << "\", \"loss\": \""
+      << registration::to_string(options.registration.robust.loss) << "\",\n"
+      << " \"proposed\": " << json_statistics(r.proposed.stats) << ",\n"
+      << " \"conventional\": " << json_statistics(r.conventional.stats) << ",\n"
+      << " \"converged\": {\"proposed\": " << r.proposed.converged << ", \"conventional\": " << r.conventional.converged
+      << "},\n"
+      << " \"paper\": {\"proposed\": " << json_statistics(paper.proposed) << ",\n"
+      << "           \"conventional\": " << json_statistics(paper.conventional) << "}}\n";
+    std::ostringstream c;
+    c << "trial,route,rx_deg,ry_deg,rz_deg,tx_mm,ty_mm,tz_mm\n";
+    for (const auto& [name, route] : {std::pair{"proposed", &r.proposed}, std::pair{"conventional", &r.conventional}}) {
+      for (std::size_t k = 0; k < route->errors.size(); ++k) {
+        c << k + 1 << ',' << name;
+        for (double v : route->errors[k]) c << ',' << fmt("%.6e", v);
+        c << '\n';
+      }
+    }
+    io::write_file_atomically(std::filesystem::path(output_dir) / "registration.json", j.str());
+    io::write_file_atomically(std::filesystem::path(output_dir) / "registration.csv", c.str());
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -211,6 +310,24 @@ int main(int argc, char** argv) {
   plan->add_option("--faces", faces, "Faces to plan on, e.g. 0,3,5-9 (default: all)");
   plan->add_option("--output", output, "PLAN.csv (x,y,z,i,j,k,face) or PLAN.dmi (DMIS PTMEAS program); default: CSV on standard output");
 
+  std::string study_name, output_dir, metric = "point-to-plane", loss = "cauchy";
+  studies::RegistrationStudyOptions study_options;
+  CLI::App* study = app.add_subcommand(
+      "study", "Reproduce a study of the paper (DESIGN.md section 3); prints a table and writes DIR/NAME.json and DIR/NAME.csv.");
+  study->add_option("name", study_name,
+                    "registration: the registration Monte Carlo of Table 1 (cube corner, 900 points, 30 misalignments)")
+      ->required()
+      ->check(CLI::IsMember({"registration"}));
+  study->add_option("--output-dir", output_dir, "Directory for NAME.json (summary) and NAME.csv (per trial)");
+  study->add_option("--noise", study_options.noise, "Gaussian noise sigma on each coordinate of the raw centres, mm (default 0)")
+      ->check(CLI::NonNegativeNumber);
+  study->add_option("--trials", study_options.trials, "Random misalignments (default 30)")->check(CLI::PositiveNumber);
+  study->add_option("--seed", study_options.seed, "Random seed (default 1)");
+  study->add_option("--metric", metric, "ICP error metric: point-to-plane (default) or point-to-point (the paper's)")
+      ->check(CLI::IsMember({"point-to-plane", "point-to-point"}));
+  study->add_option("--loss", loss, "Robust weights: cauchy (default), huber, trimmed or none")
+      ->check(CLI::IsMember({"cauchy", "huber", "trimmed", "none"}));
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -220,6 +337,10 @@ int main(int argc, char** argv) {
     if (info->parsed()) return run_info(part, json);
     if (project->parsed()) return run_project(part, points, output);
     if (plan->parsed()) return run_plan(part, spacing, faces, output);
+    if (study->parsed()) {
+      study_options.registration = registration_options(metric, loss);
+      return run_study_registration(output_dir, study_options);
+    }
   } catch (const std::exception& e) {
     std::cerr << "probecomp: " << e.what() << '\n';
     return 1;

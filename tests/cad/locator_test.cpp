@@ -115,6 +115,29 @@ TEST(ModelLocator, SameResultWithOneAndTwoThreads) {
   }
 }
 
+TEST(ModelLocator, AHintFromANearbyQueryGivesTheSameAnswer) {
+  // As in ICP: each point's foot before a small motion is the hint for its foot after it. The hinted search
+  // is exact, so it must agree with the unhinted one: same distance, and the same point where it is unique.
+  const Model model = read_model(kCadDir / "gismo_hammer.iges");
+  const ModelLocator locator(model);
+  const std::vector<Point3> before = points_around(model, 3000, 8);
+  std::vector<Point3> after;
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> step(-0.3, 0.3);
+  for (const Point3& p : before) after.push_back(p + Vector3(step(rng), step(rng), step(rng)));
+  const std::vector<ModelPoint> hints = locator.closest_points(before);
+  const std::vector<ModelPoint> plain = locator.closest_points(after);
+  const std::vector<ModelPoint> hinted = locator.closest_points(after, hints);
+  int same_face = 0;
+  for (std::size_t k = 0; k < after.size(); ++k) {
+    ASSERT_EQ(plain[k].ok(), hinted[k].ok()) << k;
+    if (!plain[k].ok()) continue;
+    EXPECT_NEAR(std::abs(hinted[k].distance), std::abs(plain[k].distance), 1e-9) << k;
+    same_face += hinted[k].face == plain[k].face;
+  }
+  EXPECT_GT(same_face, 0.99 * static_cast<double>(after.size()));  // ties between faces at an edge may differ
+}
+
 TEST(ModelLocator, SignedDistanceIsPositiveOutsideASolid) {
   // repatch-hpdc is a closed solid: points pushed out along the outward normal are outside the material.
   const Model model = read_model(kCadDir / "asitus_wavy-cube.stp");

@@ -1,0 +1,23 @@
+#include "compensation/conventional.hpp"
+
+#include <limits>
+#include <stdexcept>
+
+namespace probecomp::compensation {
+
+std::vector<Point3> conventional_contact_points(std::span<const Point3> centres, std::span<const Vector3> approach_normals,
+                                                double probe_radius) {
+  if (centres.size() != approach_normals.size()) {
+    throw std::invalid_argument("conventional compensation needs one approach normal per point");
+  }
+  std::vector<Point3> out(centres.size());
+  for (std::size_t i = 0; i < centres.size(); ++i) {
+    const double len = approach_normals[i].norm();
+    out[i] = len > 0.0 && std::isfinite(len)
+                 ? Point3(centres[i] - probe_radius * approach_normals[i] / len)
+                 : Point3::Constant(std::numeric_limits<double>::quiet_NaN());
+  }
+  return out;
+}
+
+}  // namespace probecomp::compensation

@@ -1,0 +1,275 @@
+#include "registration/icp.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+namespace probecomp::registration {
+
+using nurbs::ClosestPointStatus;
+
+const char* to_string(Metric metric) {
+  return metric == Metric::PointToPlane ? "point-to-plane" : "point-to-point";
+}
+
+const char* to_string(Status status) {
+  switch (status) {
+    case Status::Converged: return "converged";
+    case Status::MaxIterations: return "max-iterations";
+    case Status::TooFewPoints: return "too-few-points";
+    case Status::NumericalError: return "numerical-error";
+  }
+  return "?";
+}
+
+namespace {
+
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+
+struct Step {
+  RigidTransform motion = RigidTransform::Identity();  // in the CAD frame, applied to the points
+  Constraints constraints;
+  bool finite = true;
+};
+
+bool usable(const cad::ModelPoint& m, double max_distance) {
+  return m.ok() && !m.on_trim_edge && m.status != ClosestPointStatus::OnBoundary && std::abs(m.distance) <= max_distance;
+}
+
+// The step of one iteration from the points x (CAD frame), their feet and weights w (0: unused), as a motion
+// about the data's centroid c (carried along with the data) with rotations scaled by their RMS radius L.
+Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::ModelPoint> feet, std::span<const double> w,
+              const Point3& c, double L) {
+  Step step;
+  // Sums in input order: the result does not depend on the thread count.
+  Matrix6 H = Matrix6::Zero();
+  Twist g = Twist::Zero();
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (w[i] == 0.0) continue;
+    const Vector3& n = feet[i].normal;
+    Twist J;
+    J.head<3>() = (x[i] - c).cross(n) / L;
+    J.tail<3>() = n;
+    H.selfadjointView<Eigen::Lower>().rankUpdate(J, w[i]);
+    g += w[i] * n.dot(x[i] - feet[i].point) * J;
+  }
+  H = H.selfadjointView<Eigen::Lower>();
+  step.constraints = analyse_constraints(H, c, L);
+  const int free = 6 - step.constraints.fixed;
+
+  Twist delta = Twist::Zero();
+  if (metric == Metric::PointToPlane) {
+    // Gauss–Newton on the fixed motions only: δ = −Σ_k (e_k·g / λ_k) e_k over the constrained eigenvectors.
+    const Eigen::SelfAdjointEigenSolver<Matrix6> eig(H);
+    for (int k = free; k < 6; ++k) {
+      const Twist e = eig.eigenvectors().col(k);
+      delta -= (e.dot(g) / eig.eigenvalues()(k)) * e;
+    }
+  } else {
+    // Closed-form weighted least squares x → q (Arun, Huang and Blostein 1987; reflection excluded).
+    double W = 0.0;
+    Point3 cx = Point3::Zero(), cq = Point3::Zero();
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      if (w[i] == 0.0) continue;
+      W += w[i];
+      cx += w[i] * x[i];
+      cq += w[i] * feet[i].point;
+    }
+    cx /= W;
+    cq /= W;
+    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      if (w[i] != 0.0) C += w[i] * (x[i] - cx) * (feet[i].point - cq).transpose();
+    }
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+    RigidTransform M = RigidTransform::Identity();
+    M.linear() = svd.matrixV() * D * svd.matrixU().transpose();
+    M.translation() = cq - M.linear() * cx;
+    delta = scaled_twist_of(M, c, L);
+  }
+  if (free > 0) {
+    // The data say nothing about the free motions, so the step takes none of them, in a sense that does not
+    // depend on the twist's centre: the data centroid does not move along a free translation, and the data do
+    // not turn about a free rotation's axis. δ is corrected within the free subspace N (where the objective
+    // is flat) until C·δ = 0, C holding those conditions as rows.
+    const auto& N = step.constraints.free_basis;
+    Eigen::MatrixXd Cm(free, 6);
+    for (int k = 0; k < free; ++k) {
+      const FreeMotion& f = step.constraints.free[static_cast<std::size_t>(k)];
+      Cm.row(k).setZero();
+      if (f.kind == FreeMotion::Kind::Translation) {
+        Cm.row(k).tail<3>() = f.direction.transpose();
+      } else {
+        Cm.row(k).head<3>() = f.direction.transpose();
+      }
+    }
+    const Eigen::MatrixXd CN = Cm * N;
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(CN);
+    if (lu.isInvertible()) {
+      delta -= N * lu.solve(Cm * delta);
+    } else {
+      delta -= N * (N.transpose() * delta);
+    }
+  }
+  step.finite = delta.allFinite();
+  step.motion = motion_about(delta, c, L);
+  return step;
+}
+
+std::string describe(double mm_value) {
+  std::ostringstream s;
+  s.precision(2);
+  s << std::scientific << mm_value << " mm";
+  return s.str();
+}
+
+}  // namespace
+
+RegistrationResult register_points(const cad::ModelLocator& model, std::span<const Point3> machine_points,
+                                   const RegistrationOptions& options) {
+  RegistrationResult result;
+  const std::size_t n = machine_points.size();
+  const std::size_t needed = options.metric == Metric::PointToPlane ? 6 : 3;
+  RigidTransform to_cad = options.initial.inverse();
+
+  std::vector<Point3> x(n);
+  std::vector<cad::ModelPoint> feet;
+  std::vector<double> r(n), w(n);
+  std::vector<double> used_r;
+  double scale = options.robust.min_scale;
+  double max_radius = 0.0;
+  Point3 centre = Point3::Zero();
+  Point3 centroid = Point3::Zero();
+  double length = 1.0;
+
+  // Correspondences at the current transform. The first pass searches the whole model; later ones start
+  // Newton from the previous feet and, while the estimate moves, skip re-searching each point's own face for
+  // other minima (Local). Convergence is only accepted after an exact pass (the global search, bounded by the
+  // local answer) has confirmed the correspondences.
+  using Search = cad::ModelLocator::HintedSearch;
+  auto correspond = [&](Search mode) {
+    for (std::size_t i = 0; i < n; ++i) x[i] = to_cad * machine_points[i];
+    feet = feet.empty() ? model.closest_points(x) : model.closest_points(x, feet, mode);
+    used_r.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      const cad::ModelPoint& m = feet[i];
+      const bool use = x[i].allFinite() && usable(m, options.max_distance);
+      r[i] = !use ? 0.0 : options.metric == Metric::PointToPlane ? m.distance : (x[i] - m.point).norm();
+      w[i] = use ? 1.0 : 0.0;
+      if (use) used_r.push_back(r[i]);
+    }
+    scale = robust_scale(used_r, options.robust.min_scale);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (w[i] != 0.0) w[i] = robust_weight(options.robust.loss, r[i], scale);
+    }
+    return used_r.size();
+  };
+
+  result.status = Status::MaxIterations;
+  bool exact = true;  // the correspondences of this pass are exact closest points
+  Search next = Search::Local;
+  for (int it = 1; it <= options.criteria.max_iterations; ++it) {
+    exact = it == 1 || next == Search::Exact;
+    const std::size_t used = correspond(next);
+    result.iterations = it;
+    if (used < needed) {
+      result.status = Status::TooFewPoints;
+      result.stop_reason = "only " + std::to_string(used) + " of " + std::to_string(n) +
+                           " points have a usable correspondence (not on a face edge, found, finite)";
+      break;
+    }
+    if (it == 1) {
+      // The points' box centre and radius bound how far an update moves any of them. Their centroid and RMS
+      // radius are the twist's frame; both travel with the data.
+      BoundingBox box;
+      std::size_t finite = 0;
+      for (const Point3& p : x) {
+        if (!p.allFinite()) continue;
+        box.extend(p);
+        centroid += p;
+        ++finite;
+      }
+      centroid /= static_cast<double>(finite);
+      double L2 = 0.0;
+      for (const Point3& p : x) {
+        if (p.allFinite()) L2 += (p - centroid).squaredNorm();
+      }
+      // A length for the rotation scale even when all points coincide (then no rotation is fixed anyway).
+      length = std::max(std::sqrt(L2 / static_cast<double>(finite)), 1e-3);
+      centre = 0.5 * (box.min + box.max);
+      max_radius = 0.5 * box.diagonal();
+    }
+    const Step step = estimate(options.metric, x, feet, w, centroid, length);
+    result.constraints = step.constraints;
+    if (!step.finite) {
+      result.status = Status::NumericalError;
+      result.stop_reason = "the estimate is not finite (degenerate correspondences)";
+      break;
+    }
+    to_cad = step.motion * to_cad;
+    // The update acts on the points in the CAD frame; their box moves with them, so bound about its image.
+    const double moved = largest_motion(step.motion, centre, max_radius);
+    if (std::getenv("PROBECOMP_ICP_TRACE")) std::fprintf(stderr, "it %d moved %.3e scale %.3e used %zu exact %d\n", it, moved, scale, used, int(exact));
+    centre = step.motion * centre;
+    centroid = step.motion * centroid;
+    const double tolerance =
+        std::max(options.criteria.motion_tolerance,
+                 options.criteria.relative_motion_tolerance * scale / std::sqrt(static_cast<double>(used)));
+    if (moved <= tolerance) {
+      if (exact) {
+        result.status = Status::Converged;
+        result.stop_reason = "converged: the last update moved no point more than " + describe(moved);
+        break;
+      }
+      next = Search::Exact;
+    } else {
+      next = Search::Local;
+    }
+    if (it == options.criteria.max_iterations) {
+      result.stop_reason = "iteration limit " + std::to_string(it) + " reached; the last update moved points up to " +
+                           describe(moved);
+    }
+  }
+
+  // The correspondences reported are the last pass's: at the final transform to within the motion tolerance
+  // when converged; otherwise an exact pass at the final transform.
+  if (n > 0 && result.status != Status::NumericalError && result.status != Status::Converged) correspond(Search::Exact);
+  result.transform = to_cad.inverse();
+  result.scale = scale;
+  result.matches.resize(n);
+  double ss = 0.0;
+  result.used = 0;
+  result.inliers = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    PointMatch& pm = result.matches[i];
+    if (i < feet.size()) {
+      const cad::ModelPoint& m = feet[i];
+      pm.status = m.status;
+      pm.face = m.face;
+      pm.u = m.u;
+      pm.v = m.v;
+      pm.distance = m.distance;
+      pm.on_edge = m.ok() && (m.on_trim_edge || m.status == ClosestPointStatus::OnBoundary);
+    }
+    pm.weight = w[i];
+    const bool used = i < feet.size() && x[i].allFinite() && usable(feet[i], options.max_distance);
+    result.used += used;
+    pm.inlier = used && std::abs(r[i]) <= kOutlierSigmas * scale;
+    if (pm.inlier) {
+      ++result.inliers;
+      ss += pm.distance * pm.distance;
+    }
+  }
+  result.rms = result.inliers > 0 ? std::sqrt(ss / result.inliers) : 0.0;
+  return result;
+}
+
+}  // namespace probecomp::registration

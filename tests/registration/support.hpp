@@ -1,0 +1,54 @@
+#pragma once
+// Models and point sets for the registration tests.
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "cad/model.hpp"
+#include "registration/rigid.hpp"
+
+namespace probecomp::testing {
+
+inline cad::Model single_face_model(nurbs::Surface s, int outward = 1, bool material_known = true) {
+  cad::Model m;
+  m.path = "in-memory";
+  m.file_units = "mm";
+  m.faces.push_back(cad::Face{.index = 0, .name = "", .source_type = "bspline", .surface = std::move(s), .trim = nullptr,
+                              .outward = outward, .material_known = material_known, .exact = true});
+  return m;
+}
+
+// n points S(u,v) with (u,v) uniform in [margin, 1 − margin]², and their (u,v).
+inline std::vector<Point3> points_on(const nurbs::Surface& s, int n, double margin, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> t(margin, 1.0 - margin);
+  std::vector<Point3> out;
+  for (int k = 0; k < n; ++k) {
+    const double u = t(rng), v = t(rng);
+    out.push_back(nurbs::evaluate(s, u, v));
+  }
+  return out;
+}
+
+inline std::vector<Point3> moved(const registration::RigidTransform& T, const std::vector<Point3>& points) {
+  std::vector<Point3> out;
+  for (const Point3& p : points) out.push_back(T * p);
+  return out;
+}
+
+// The largest distance between where `estimated` and `truth` put the points, mm.
+inline double largest_disagreement(const registration::RigidTransform& estimated, const registration::RigidTransform& truth,
+                                   const std::vector<Point3>& points) {
+  double worst = 0.0;
+  for (const Point3& p : points) worst = std::max(worst, (estimated * p - truth * p).norm());
+  return worst;
+}
+
+// The angle of the rotation between the two transforms, degrees.
+inline double rotation_disagreement_deg(const registration::RigidTransform& estimated,
+                                        const registration::RigidTransform& truth) {
+  return Eigen::AngleAxisd(estimated.rotation().transpose() * truth.rotation()).angle() * 180.0 / M_PI;
+}
+
+}  // namespace probecomp::testing
