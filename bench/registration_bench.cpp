@@ -31,8 +31,12 @@ const Case& registration_case() {
                                       .material_known = true, .exact = true});
     const double r = 1.0;
     cad::OffsetModel offset = cad::offset_model(nominal, r);
+    // 1° about each axis through the panel's centre, then 1 mm along each axis: the corner of the study's range.
+    const nurbs::Domain d = nominal.faces[0].surface.domain();
+    const Point3 centre = nurbs::evaluate(nominal.faces[0].surface, 0.5 * (d.u0 + d.u1), 0.5 * (d.v0 + d.v1));
     const registration::RigidTransform truth =
-        registration::from_pose({.rx = 1.0, .ry = -1.0, .rz = 1.0, .t = Vector3(1.0, -1.0, 1.0)});
+        Eigen::Translation3d(centre + Vector3(1.0, -1.0, 1.0)) *
+        registration::from_pose({.rx = 1.0, .ry = -1.0, .rz = 1.0, .t = Vector3::Zero()}) * Eigen::Translation3d(-centre);
     std::mt19937_64 rng(1);
     std::uniform_real_distribution<double> t(0.02, 0.98);
     std::vector<Point3> raw;

@@ -1,14 +1,16 @@
 #include "registration/icp.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <Eigen/LU>
 #include <Eigen/SVD>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <sstream>
+
+#include "nurbs/point_tree.hpp"
 
 namespace probecomp::registration {
 
@@ -133,15 +135,18 @@ std::string describe(double mm_value) {
 
 }  // namespace
 
-RegistrationResult register_points(const cad::ModelLocator& model, std::span<const Point3> machine_points,
-                                   const RegistrationOptions& options) {
+namespace {
+
+// The ICP loop on all `machine_points`. `hints` (empty, or one per point) start the first pass's Newton.
+RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point3> machine_points,
+                           const RegistrationOptions& options, std::vector<cad::ModelPoint> hints) {
   RegistrationResult result;
   const std::size_t n = machine_points.size();
   const std::size_t needed = options.metric == Metric::PointToPlane ? 6 : 3;
   RigidTransform to_cad = options.initial.inverse();
 
   std::vector<Point3> x(n);
-  std::vector<cad::ModelPoint> feet;
+  std::vector<cad::ModelPoint> feet = std::move(hints);
   std::vector<double> r(n), w(n);
   std::vector<double> used_r;
   double scale = options.robust.min_scale;
@@ -176,8 +181,9 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
   result.status = Status::MaxIterations;
   bool exact = true;  // the correspondences of this pass are exact closest points
   Search next = Search::Local;
+  const bool hinted_start = !feet.empty();
   for (int it = 1; it <= options.criteria.max_iterations; ++it) {
-    exact = it == 1 || next == Search::Exact;
+    exact = (it == 1 && !hinted_start) || next == Search::Exact;
     const std::size_t used = correspond(next);
     result.iterations = it;
     if (used < needed) {
@@ -217,7 +223,6 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
     to_cad = step.motion * to_cad;
     // The update acts on the points in the CAD frame; their box moves with them, so bound about its image.
     const double moved = largest_motion(step.motion, centre, max_radius);
-    if (std::getenv("PROBECOMP_ICP_TRACE")) std::fprintf(stderr, "it %d moved %.3e scale %.3e used %zu exact %d\n", it, moved, scale, used, int(exact));
     centre = step.motion * centre;
     centroid = step.motion * centroid;
     const double tolerance =
@@ -269,6 +274,52 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
     }
   }
   result.rms = result.inliers > 0 ? std::sqrt(ss / result.inliers) : 0.0;
+  return result;
+}
+
+}  // namespace
+
+RegistrationResult register_points(const cad::ModelLocator& model, std::span<const Point3> machine_points,
+                                   const RegistrationOptions& options) {
+  const std::size_t n = machine_points.size();
+  if (n < 4 * kCoarseStagePoints) return iterate(model, machine_points, options, {});
+  // Coarse stage: a spread subset (every k-th point) brings the model close, where closest points are cheap.
+  // Then each point's Newton starts from the foot of its nearest subset point, and the full set iterates on;
+  // an exact pass still confirms every correspondence before convergence is accepted.
+  const std::size_t stride = n / kCoarseStagePoints;
+  std::vector<Point3> subset;
+  for (std::size_t i = 0; i < n; i += stride) {
+    if (machine_points[i].allFinite()) subset.push_back(machine_points[i]);
+  }
+  const RegistrationResult coarse = iterate(model, subset, options, {});
+  if (coarse.status == Status::TooFewPoints || coarse.status == Status::NumericalError) {
+    return iterate(model, machine_points, options, {});
+  }
+  nurbs::PointCloud cloud;
+  cloud.points = subset;
+  nurbs::PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  std::vector<cad::ModelPoint> hints(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      if (!machine_points[i].allFinite()) continue;
+      const double q[3] = {machine_points[i].x(), machine_points[i].y(), machine_points[i].z()};
+      std::uint32_t k = 0;
+      double dist_sq = 0.0;  // squared (nanoflann)
+      nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(1);
+      knn.init(&k, &dist_sq);
+      tree.findNeighbors(knn, q, nanoflann::SearchParams());
+      const PointMatch& m = coarse.matches[k];
+      hints[i].status = m.status;
+      hints[i].face = m.face;
+      hints[i].u = m.u;
+      hints[i].v = m.v;
+    }
+  });
+  RegistrationOptions full = options;
+  full.initial = coarse.transform;
+  RegistrationResult result = iterate(model, machine_points, full, std::move(hints));
+  result.coarse_iterations = coarse.iterations;
   return result;
 }
 

@@ -67,7 +67,8 @@ struct RegistrationResult {
   RigidTransform transform = RigidTransform::Identity(); // CAD to machine
   double rms = 0.0;            // RMS distance of the inliers, mm
   double scale = 0.0;          // robust scale σ̂ of the residuals at the end, mm
-  int iterations = 0;
+  int iterations = 0;           // on all points
+  int coarse_iterations = 0;    // on the subset first (large point sets; see kCoarseStagePoints)
   int used = 0;                // correspondences used in the last step (not on an edge, within max_distance)
   int inliers = 0;
   Constraints constraints;     // the motions the data fix; the free ones were held at the start
@@ -75,6 +76,10 @@ struct RegistrationResult {
 
   [[nodiscard]] bool converged() const { return status == Status::Converged; }
 };
+
+// Above 4× this many points, a spread subset of about this many is registered first: closest points far from
+// the model are the costly ones, and the subset takes the whole set close for a fraction of the cost.
+inline constexpr std::size_t kCoarseStagePoints = 4096;
 
 // Registers `machine_points` (machine frame) to the model behind `model` (CAD frame). The result's transform
 // maps CAD to machine. Points on an edge, not found, or not finite are reported, never used.

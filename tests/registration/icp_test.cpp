@@ -52,12 +52,12 @@ struct NoisyCase {
   std::vector<bool> outlier;
 };
 
-NoisyCase noisy_case(const nurbs::Surface& s, double sigma) {
+NoisyCase noisy_case(const nurbs::Surface& s, double sigma, int n = 10000) {
   NoisyCase c;
   std::mt19937_64 rng(2);
   std::uniform_real_distribution<double> t(0.03, 0.97), gross(0.5, 2.0), pick(0.0, 1.0);
   std::normal_distribution<double> g(0.0, sigma);
-  for (int k = 0; k < 10000; ++k) {
+  for (int k = 0; k < n; ++k) {
     const double u = t(rng), v = t(rng);
     const Point3 p = nurbs::evaluate(s, u, v);
     Point3 q = p + Vector3(g(rng), g(rng), g(rng));
@@ -103,9 +103,10 @@ TEST(Icp, WithNoiseAndOnePercentGrossOutliersTheRobustLossesStayWithinTheNoise) 
 }
 
 TEST(Icp, SameResultWithOneAndTwoThreads) {
+  // Enough points for the coarse stage (a subset first, then all points from their neighbours' feet).
   const cad::Model model = single_face_model(freeform());
   const cad::ModelLocator locator(model);
-  const NoisyCase c = noisy_case(model.faces[0].surface, 0.005);
+  const NoisyCase c = noisy_case(model.faces[0].surface, 0.005, 20000);
   std::vector<RegistrationResult> results;
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
@@ -113,6 +114,9 @@ TEST(Icp, SameResultWithOneAndTwoThreads) {
   }
   EXPECT_EQ(results[0].transform.matrix(), results[1].transform.matrix());
   EXPECT_EQ(results[0].iterations, results[1].iterations);
+  EXPECT_GT(results[0].coarse_iterations, 0);
+  ASSERT_TRUE(results[0].converged()) << results[0].stop_reason;
+  EXPECT_LT(largest_disagreement(results[0].transform, kMisalignment, c.nominal), 0.005);
   for (std::size_t i = 0; i < c.measured.size(); ++i) {
     EXPECT_EQ(results[0].matches[i].distance, results[1].matches[i].distance);
     EXPECT_EQ(results[0].matches[i].inlier, results[1].matches[i].inlier);
