@@ -68,17 +68,28 @@ struct TrueOffset {
 // principal curvature k > 0 means S bends towards n; the offset's metric scales by 1 − d·k, which vanishes
 // where the offset folds).
 TrueOffset true_offset(const Surface& s, double d, double u, double v) {
-  const nurbs::UnitNormal un = nurbs::unit_normal(s, u, v);
   TrueOffset out;
-  if (un.status == nurbs::UnitNormal::Status::Degenerate) {
-    out.degenerate = true;
-    return out;
-  }
   const nurbs::SurfaceD2 sd = nurbs::derivatives_d2(s, u, v);
-  out.point = sd.S + d * un.n;
-  out.normal = un.n;
+  // The normal from these derivatives where they are clearly independent; near a pole or a collapsed edge
+  // (a tangent tiny against the other, as unit_normal judges it, or |S_u × S_v| tiny against |S_u||S_v|),
+  // unit_normal's limit from the neighbourhood.
+  Vector3 n = sd.Su.cross(sd.Sv);
+  const double len = n.norm();
+  const double a = sd.Su.norm(), b = sd.Sv.norm();
+  if (std::min(a, b) > 1e-7 * std::max(a, b) && len > 1e-6 * a * b) {
+    n /= len;
+  } else {
+    const nurbs::UnitNormal un = nurbs::unit_normal(s, u, v);
+    if (un.status == nurbs::UnitNormal::Status::Degenerate) {
+      out.degenerate = true;
+      return out;
+    }
+    n = un.n;
+  }
+  out.point = sd.S + d * n;
+  out.normal = n;
   const double E = sd.Su.dot(sd.Su), F = sd.Su.dot(sd.Sv), G = sd.Sv.dot(sd.Sv);
-  const double L = sd.Suu.dot(un.n), M = sd.Suv.dot(un.n), N = sd.Svv.dot(un.n);
+  const double L = sd.Suu.dot(n), M = sd.Suv.dot(n), N = sd.Svv.dot(n);
   const double det = E * G - F * F;
   if (!(det > 0.0)) return out;  // a pole: the curvature there is the neighbourhood's, checked around it
   const double K = (L * N - M * M) / det;
