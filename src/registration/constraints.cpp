@@ -6,10 +6,14 @@
 namespace probecomp::registration {
 
 Constraints analyse_constraints(const Eigen::Matrix<double, 6, 6>& H, const Point3& centre, double length) {
+  return analyse_constraints(Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(H), centre, length);
+}
+
+Constraints analyse_constraints(const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>& eig,
+                                const Point3& centre, double length) {
   Constraints c;
   c.centre = centre;
   c.length = length;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(H);
   const Eigen::Matrix<double, 6, 1> lambda = eig.eigenvalues();  // ascending
   const double largest = lambda(5);
   int free = 0;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 
 #include "nurbs/types.hpp"
 #include "registration/rigid.hpp"
@@ -40,6 +41,9 @@ struct Constraints {
 
 // H in the scaled twist coordinates about `centre` (RMS radius `length`); see above.
 [[nodiscard]] Constraints analyse_constraints(const Eigen::Matrix<double, 6, 6>& H, const Point3& centre, double length);
+// The same from H's eigen-decomposition, for a caller that solves with it too.
+[[nodiscard]] Constraints analyse_constraints(const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>& eig,
+                                              const Point3& centre, double length);
 
 // Converts a scaled twist δ = (L·ω, v) about the centre into the rigid motion x ↦ c + Rot(ω)(x − c) + v.
 [[nodiscard]] RigidTransform motion_about(const Twist& delta, const Point3& centre, double length);

@@ -1,10 +1,10 @@
 #include "registration/icp.hpp"
 
 #include <Eigen/Eigenvalues>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <Eigen/LU>
 #include <Eigen/SVD>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -62,13 +62,13 @@ Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::Mod
     g += w[i] * n.dot(x[i] - feet[i].point) * J;
   }
   H = H.selfadjointView<Eigen::Lower>();
-  step.constraints = analyse_constraints(H, c, L);
+  const Eigen::SelfAdjointEigenSolver<Matrix6> eig(H);
+  step.constraints = analyse_constraints(eig, c, L);
   const int free = 6 - step.constraints.fixed;
 
   Twist delta = Twist::Zero();
   if (metric == Metric::PointToPlane) {
     // Gauss–Newton on the fixed motions only: δ = −Σ_k (e_k·g / λ_k) e_k over the constrained eigenvectors.
-    const Eigen::SelfAdjointEigenSolver<Matrix6> eig(H);
     for (int k = free; k < 6; ++k) {
       const Twist e = eig.eigenvectors().col(k);
       delta -= (e.dot(g) / eig.eigenvalues()(k)) * e;
@@ -133,10 +133,6 @@ std::string describe(double mm_value) {
   return s.str();
 }
 
-}  // namespace
-
-namespace {
-
 // The ICP loop on all `machine_points`. `hints` (empty, or one per point) start the first pass's Newton.
 RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point3> machine_points,
                            const RegistrationOptions& options, std::vector<cad::ModelPoint> hints) {
@@ -148,6 +144,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   std::vector<Point3> x(n);
   std::vector<cad::ModelPoint> feet = std::move(hints);
   std::vector<double> r(n), w(n);
+  std::vector<char> use(n, 0);  // the point's correspondence enters the estimate (its weight may still be 0)
   std::vector<double> used_r;
   double scale = options.robust.min_scale;
   double max_radius = 0.0;
@@ -166,10 +163,10 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
     used_r.clear();
     for (std::size_t i = 0; i < n; ++i) {
       const cad::ModelPoint& m = feet[i];
-      const bool use = x[i].allFinite() && usable(m, options.max_distance);
-      r[i] = !use ? 0.0 : options.metric == Metric::PointToPlane ? m.distance : (x[i] - m.point).norm();
-      w[i] = use ? 1.0 : 0.0;
-      if (use) used_r.push_back(r[i]);
+      use[i] = x[i].allFinite() && usable(m, options.max_distance);
+      r[i] = !use[i] ? 0.0 : options.metric == Metric::PointToPlane ? m.distance : (x[i] - m.point).norm();
+      w[i] = use[i] ? 1.0 : 0.0;
+      if (use[i]) used_r.push_back(r[i]);
     }
     scale = robust_scale(used_r, options.robust.min_scale);
     for (std::size_t i = 0; i < n; ++i) {
@@ -265,9 +262,8 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
       pm.on_edge = m.ok() && (m.on_trim_edge || m.status == ClosestPointStatus::OnBoundary);
     }
     pm.weight = w[i];
-    const bool used = i < feet.size() && x[i].allFinite() && usable(feet[i], options.max_distance);
-    result.used += used;
-    pm.inlier = used && std::abs(r[i]) <= kOutlierSigmas * scale;
+    result.used += use[i];
+    pm.inlier = use[i] && std::abs(r[i]) <= kOutlierSigmas * scale;
     if (pm.inlier) {
       ++result.inliers;
       ss += pm.distance * pm.distance;

@@ -72,7 +72,9 @@ TEST(Routes, MaterialSideFromTheDataAndFromTheApproachNormals) {
     EXPECT_EQ(m.faces[0].outward, -1);
     EXPECT_EQ(sides[0].source, with_normals ? MaterialSource::ApproachNormals : MaterialSource::Data);
     EXPECT_GT(sides[0].agreeing, 0.9 * sides[0].points);
-    if (!with_normals) EXPECT_GT(sides[0].median_distance, 0.0);  // r = 1 mm give or take the misalignment
+    if (!with_normals) {
+      EXPECT_GT(sides[0].median_distance, 0.0);  // r = 1 mm give or take the misalignment
+    }
   }
   // A face from a solid keeps its side whatever the points say.
   cad::Model solid = single_face_model(s, +1, true);
