@@ -22,7 +22,10 @@ struct AdaptiveFitOptions {
   // exceeds in any span of the surface with this probability (split evenly over the spans, so that hundreds of
   // small spans do not raise false alarms by their number).
   double false_alarm = 0.01;
-  int min_points_to_split = 8;  // a span with fewer points is not split (its quarters would hold one or none)
+  // A span with fewer points is not split (its quarters would hold one or none). Four: a narrow dent in a grid of
+  // points about a third of its width apart needs spans that hold only a few (measured on the free-form case: a
+  // dent of σ = 1.5 mm, 0.84 mm grid: largest error 21 µm with 8, 7.9 µm with 4).
+  int min_points_to_split = 4;
   double min_points_per_control_point = 4.0;  // refinement stops before the fit has fewer
 };
 

@@ -262,7 +262,7 @@ bool closer(const ClosestPointResult& a, const ClosestPointResult& b) {
 struct ClosestPointSolver::Seeds {
   explicit Seeds(Surface refined) : bezier(std::move(refined)) {}
   CellAxis axis_u, axis_v;
-  Surface bezier;  // the surface refined so that cell (i, j) has control points i·p .. i·p+p by j·q .. j·q+q
+  Surface bezier;  // the surface refined so that knot span (i, j) has control points i·p .. i·p+p by j·q .. j·q+q
   PointCloud cloud;
   std::vector<double> u, v, radius;  // radius: largest distance from the seed to its cell's control points
   std::vector<CellBox> box;
@@ -272,23 +272,57 @@ struct ClosestPointSolver::Seeds {
 };
 
 namespace {
-// Seed cell (cu, cv) as a Bézier patch: its control points in the refined surface and its parameter box.
+
+// The part [t0, t1] ⊂ [0, 1] of a Bézier curve w[0..deg], in place: de Casteljau at t0 keeping the right part
+// (ascending sweep: w[k] ends as P_k^(deg−k)), then at the matching point keeping the left part (descending
+// sweep: w[k] ends as P_0^(k)).
+void restrict_bezier(HomogeneousPoint* w, int deg, double t0, double t1) {
+  if (t0 > 0.0) {
+    for (int level = 1; level <= deg; ++level) {
+      for (int k = 0; k <= deg - level; ++k) w[k] = (1.0 - t0) * w[k] + t0 * w[k + 1];
+    }
+  }
+  const double s = t0 < 1.0 ? (t1 - t0) / (1.0 - t0) : 1.0;
+  if (s < 1.0) {
+    for (int level = 1; level <= deg; ++level) {
+      for (int k = deg; k >= level; --k) w[k] = (1.0 - s) * w[k - 1] + s * w[k];
+    }
+  }
+}
+
+// Seed cell (cu, cv) as a Bézier patch: its knot span's Bézier net (from the refined surface) cut down to the
+// cell's part of the span by de Casteljau, and its parameter box. Refining only at the breakpoints keeps the
+// refined net near the surface's own size, where refining at every cell boundary multiplied it by the cells
+// per span squared (5 million points for a 105 × 83-span face).
 BezierPatch cell_patch(const Surface& bezier, const CellAxis& axis_u, const CellAxis& axis_v, int cu, int cv) {
   const int p = bezier.p();
   const int q = bezier.q();
+  const int su = cu / axis_u.per_span, sv = cv / axis_v.per_span;
   BezierPatch patch{p, q, {axis_u.lower(cu), axis_u.upper(cu), axis_v.lower(cv), axis_v.upper(cv)}, {}};
   patch.net.reserve(static_cast<std::size_t>((p + 1) * (q + 1)));
   for (int a = 0; a <= p; ++a)
-    for (int b = 0; b <= q; ++b) patch.net.push_back(bezier.homogeneous(cu * p + a, cv * q + b));
+    for (int b = 0; b <= q; ++b) patch.net.push_back(bezier.homogeneous(su * p + a, sv * q + b));
+  const double u0 = static_cast<double>(cu % axis_u.per_span) / axis_u.per_span;
+  const double v0 = static_cast<double>(cv % axis_v.per_span) / axis_v.per_span;
+  HomogeneousPoint work[kMaxDegree + 1];
+  for (int b = 0; b <= q; ++b) {
+    for (int a = 0; a <= p; ++a) work[a] = patch.net[static_cast<std::size_t>(a * (q + 1) + b)];
+    restrict_bezier(work, p, u0, u0 + 1.0 / axis_u.per_span);
+    for (int a = 0; a <= p; ++a) patch.net[static_cast<std::size_t>(a * (q + 1) + b)] = work[a];
+  }
+  for (int a = 0; a <= p; ++a) {
+    HomogeneousPoint* row = patch.net.data() + a * (q + 1);
+    restrict_bezier(row, q, v0, v0 + 1.0 / axis_v.per_span);
+  }
   return patch;
 }
 
-// The knots that make every cell of the axis a Bézier segment: each cell boundary at multiplicity = degree.
-std::vector<double> bezier_knots(const CellAxis& axis, const KnotVector& U) {
+// The knots that make every knot span a Bézier segment: each interior breakpoint at multiplicity = degree.
+std::vector<double> bezier_knots(const KnotVector& U) {
   std::vector<double> X;
-  for (int c = 1; c < axis.count(); ++c) {
-    const double t = axis.lower(c);
-    X.insert(X.end(), static_cast<std::size_t>(U.degree() - U.multiplicity(t)), t);
+  const std::vector<double> breaks = U.breakpoints();
+  for (std::size_t c = 1; c + 1 < breaks.size(); ++c) {
+    X.insert(X.end(), static_cast<std::size_t>(U.degree() - U.multiplicity(breaks[c])), breaks[c]);
   }
   return X;
 }
@@ -300,12 +334,20 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
   Seeds& sd = *seeds_;
   const int p = surface_.p();
   const int q = surface_.q();
-  sd.axis_u = {surface_.U().breakpoints(), options_.seeds_per_span > 0 ? options_.seeds_per_span : 2 * (p + 1)};
-  sd.axis_v = {surface_.V().breakpoints(), options_.seeds_per_span > 0 ? options_.seeds_per_span : 2 * (q + 1)};
+  int per_u = options_.seeds_per_span > 0 ? options_.seeds_per_span : 2 * (p + 1);
+  int per_v = options_.seeds_per_span > 0 ? options_.seeds_per_span : 2 * (q + 1);
+  const double spans = static_cast<double>(surface_.U().num_spans()) * surface_.V().num_spans();
+  if (options_.seeds_per_span == 0 && spans * per_u * per_v > options_.max_cells) {
+    const int per = std::max(2, static_cast<int>(std::sqrt(options_.max_cells / spans)));
+    per_u = std::min(per_u, per);
+    per_v = std::min(per_v, per);
+  }
+  sd.axis_u = {surface_.U().breakpoints(), per_u};
+  sd.axis_v = {surface_.V().breakpoints(), per_v};
   const int nu = sd.axis_u.count();
   const int nv = sd.axis_v.count();
   sd.bezier =
-      refine_knots_v(refine_knots_u(surface_, bezier_knots(sd.axis_u, surface_.U())), bezier_knots(sd.axis_v, surface_.V()));
+      refine_knots_v(refine_knots_u(surface_, bezier_knots(surface_.U())), bezier_knots(surface_.V()));
 
   const std::size_t n = static_cast<std::size_t>(nu) * nv;
   sd.cloud.points.resize(n);

@@ -54,6 +54,11 @@ struct ClosestPointOptions {
   // 1 query in 10 000 on a wild random surface missed a second minimum in the same cell; with 2·(degree + 1),
   // none did, and queries were faster (thinner cell boxes prune more neighbours).
   int seeds_per_span = 0;
+  // With the default density, a face of many knot spans (a refined fit, a deformed simulation surface: 100 × 80
+  // spans) would get half a million cells, costing a second and hundreds of MB to index. Above this many cells
+  // the default density is lowered (to 2 per span at least): such spans are small and nearly flat, so fewer,
+  // still thin, cells bound them as tightly.
+  int max_cells = 1 << 16;
   int max_iterations = 40;  // per Newton start
 };
 

@@ -5,16 +5,6 @@
 
 namespace probecomp::nurbs {
 
-namespace {
-// Greville abscissa of basis function i: the average of its p interior knots (The NURBS Book, eq. 9.24
-// uses it for parameters with linear precision).
-double greville(const KnotVector& U, int i) {
-  double sum = 0.0;
-  for (int k = 1; k <= U.degree(); ++k) sum += U[i + k];
-  return sum / U.degree();
-}
-}  // namespace
-
 Surface make_plane_patch(const Point3& origin, const Vector3& a, const Vector3& b, int p, int q, int spans_u,
                          int spans_v) {
   KnotVector U = KnotVector::uniform(p, spans_u);
@@ -22,7 +12,7 @@ Surface make_plane_patch(const Point3& origin, const Vector3& a, const Vector3& 
   std::vector<Point3> P;
   P.reserve(static_cast<std::size_t>(U.num_basis()) * V.num_basis());
   for (int i = 0; i < U.num_basis(); ++i)
-    for (int j = 0; j < V.num_basis(); ++j) P.push_back(origin + greville(U, i) * a + greville(V, j) * b);
+    for (int j = 0; j < V.num_basis(); ++j) P.push_back(origin + U.greville(i) * a + V.greville(j) * b);
   return Surface(std::move(U), std::move(V), P);
 }
 

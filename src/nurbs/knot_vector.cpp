@@ -81,4 +81,11 @@ std::vector<double> KnotVector::breakpoints() const {
   return b;
 }
 
+double KnotVector::greville(int i) const {
+  if (p_ == 0) return 0.5 * ((*this)[i] + (*this)[i + 1]);
+  double sum = 0.0;
+  for (int k = 1; k <= p_; ++k) sum += (*this)[i + k];
+  return sum / p_;
+}
+
 }  // namespace probecomp::nurbs

@@ -45,6 +45,9 @@ class KnotVector {
   // The distinct knots, front() to back(), in order: the breakpoints of the spans.
   [[nodiscard]] std::vector<double> breakpoints() const;
   [[nodiscard]] int num_spans() const { return static_cast<int>(breakpoints().size()) - 1; }
+  // Greville abscissa of basis function i, the average of its p interior knots (The NURBS Book, eq. 9.24): where
+  // control point i acts most; control points there reproduce a linear function exactly.
+  [[nodiscard]] double greville(int i) const;
 
  private:
   std::vector<double> U_;

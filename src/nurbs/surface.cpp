@@ -222,4 +222,13 @@ Surface transposed(const Surface& s) {
 
 Surface insert_knot_v(const Surface& s, double v, int r) { return transposed(insert_knot_u(transposed(s), v, r)); }
 
+Surface transformed(const Surface& s, const Eigen::Isometry3d& T) {
+  std::vector<HomogeneousPoint> Qw(s.homogeneous());
+  for (HomogeneousPoint& q : Qw) {
+    // (w·P, w) ↦ (w·(R·P + t), w) = (R·(w·P) + w·t, w).
+    q.head<3>() = T.linear() * q.head<3>() + q.w() * T.translation();
+  }
+  return Surface(s.U(), s.V(), std::move(Qw));
+}
+
 }  // namespace probecomp::nurbs

@@ -81,6 +81,9 @@ struct UnitNormal {
 [[nodiscard]] Surface refine_knots_u(const Surface& s, const std::vector<double>& X);
 [[nodiscard]] Surface refine_knots_v(const Surface& s, const std::vector<double>& X);
 
+// The surface moved by the affine map x ↦ T·x (exact: NURBS are affinely invariant; weights are kept).
+[[nodiscard]] Surface transformed(const Surface& s, const Eigen::Isometry3d& T);
+
 // The same surface with u and v exchanged: T(v,u) = S(u,v), so its normal S_v × S_u is reversed.
 [[nodiscard]] Surface transposed(const Surface& s);
 

@@ -59,6 +59,10 @@ struct PointMatch {
   bool on_edge = false;       // the foot point is on a face's trim or domain edge: the point lies beyond it
   double weight = 0.0;        // robust weight in the last step; 0 when not used
   bool inlier = false;        // used, and |distance| ≤ kOutlierSigmas · scale
+
+  [[nodiscard]] bool ok() const {
+    return status == nurbs::ClosestPointStatus::Converged || status == nurbs::ClosestPointStatus::OnBoundary;
+  }
 };
 
 struct RegistrationResult {

@@ -1,0 +1,341 @@
+#include "compensation/pipeline.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include "cad/locator.hpp"
+#include "cad/offset_model.hpp"
+#include "compensation/contact.hpp"
+#include "compensation/conventional.hpp"
+#include "nurbs/closest_point.hpp"
+
+namespace probecomp::compensation {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::string mm(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+// Points spread over the input (every n/k-th) for cheap whole-set checks.
+std::vector<Point3> spread_subset(std::span<const Point3> points, std::size_t k) {
+  std::vector<Point3> out;
+  const std::size_t step = std::max<std::size_t>(1, points.size() / k);
+  for (std::size_t i = 0; i < points.size(); i += step) {
+    if (points[i].allFinite()) out.push_back(points[i]);
+  }
+  return out;
+}
+
+// Stops the run when the points are nowhere near the model (wrong file, frame or unit): ICP would otherwise
+// "align" them to whatever is nearest.
+void check_points_near(const cad::ModelLocator& locator, std::span<const Point3> points,
+                       const registration::RigidTransform& initial, double fraction) {
+  BoundingBox box;
+  for (const cad::Face& f : locator.model().faces) {
+    const BoundingBox b = nurbs::bounding_box(f.surface);
+    box.extend(b.min);
+    box.extend(b.max);
+  }
+  // 257 points give the median to within a few per cent of the distribution: plenty for a gross check.
+  std::vector<Point3> subset = spread_subset(points, 257);
+  if (subset.empty()) throw std::invalid_argument("no finite points to compensate");
+  const registration::RigidTransform to_cad = initial.inverse();
+  for (Point3& p : subset) p = to_cad * p;
+  const std::vector<cad::ModelPoint> feet = locator.closest_points(subset);
+  std::vector<double> d;
+  for (const cad::ModelPoint& m : feet) d.push_back(m.ok() ? std::abs(m.distance) : std::numeric_limits<double>::infinity());
+  const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
+  std::nth_element(d.begin(), mid, d.end());
+  const double limit = fraction * box.diagonal();
+  if (!(*mid <= limit)) {
+    throw std::invalid_argument("the points are nowhere near the model: their median distance from it is " + mm(*mid) +
+                                " mm, more than " + mm(limit) + " mm (" + mm(100 * fraction) +
+                                " % of its size); check the CAD file, the frame and the units");
+  }
+}
+
+void check_registration(const registration::RegistrationResult& r) {
+  if (r.status == registration::Status::TooFewPoints || r.status == registration::Status::NumericalError) {
+    throw std::invalid_argument(std::string("registration failed (") + registration::to_string(r.status) + "): " +
+                                r.stop_reason);
+  }
+}
+
+// Signed distance of x (CAD frame) from face `face`, by Newton from (u0, v0), with the global search where that
+// fails. + on the outward side.
+struct FaceDistance {
+  const cad::Face* face;
+  mutable std::unique_ptr<nurbs::ClosestPointSolver> solver;  // built on first need
+
+  [[nodiscard]] double signed_distance(const Point3& x, const nurbs::ClosestPointResult& r) const {
+    const nurbs::UnitNormal n = nurbs::unit_normal(face->surface, r.u, r.v);
+    const double side = (x - r.point).dot(static_cast<double>(face->outward) * n.n);
+    return side < 0.0 ? -r.distance : r.distance;
+  }
+};
+
+}  // namespace
+
+const char* to_string(Method m) { return m == Method::Cad ? "cad" : "conventional"; }
+
+const char* to_string(PointStatus s) {
+  switch (s) {
+    case PointStatus::Ok: return "ok";
+    case PointStatus::Outlier: return "outlier";
+    case PointStatus::Edge: return "edge";
+    case PointStatus::FewPoints: return "few-points";
+    case PointStatus::NotOnModel: return "not-on-model";
+    case PointStatus::Failed: return "failed";
+  }
+  return "?";
+}
+
+int CompensationResult::count(PointStatus s) const {
+  return static_cast<int>(std::count_if(points.begin(), points.end(), [s](const auto& p) { return p.status == s; }));
+}
+
+CompensationResult compensate(const cad::Model& model, std::span<const Point3> raw,
+                              std::optional<std::span<const Vector3>> approach_normals,
+                              const CompensateOptions& options) {
+  const double r = options.probe_radius;
+  if (!(r > 0.0) || !std::isfinite(r)) throw std::invalid_argument("the probe radius must be a positive number of mm");
+  if (raw.empty()) throw std::invalid_argument("no points to compensate");
+  if (model.faces.empty()) throw std::invalid_argument("the CAD model has no faces");
+  if (approach_normals && approach_normals->size() != raw.size()) {
+    throw std::invalid_argument("the approach normals do not match the points in number");
+  }
+  if (options.method == Method::Conventional && !approach_normals) {
+    throw std::invalid_argument(
+        "--method conventional needs the approach normals (columns i,j,k, or DMIS points with i,j,k); the input has "
+        "none: use --method cad, which does not need them");
+  }
+  auto stage = [&](const std::string& name, double fraction) {
+    if (options.progress) options.progress(name, fraction);
+  };
+
+  CompensationResult out;
+  out.method = options.method;
+  out.points.resize(raw.size());
+  cad::Model work = model;
+  std::map<int, FaceReport> reports;  // by position in model.faces
+
+  if (options.method == Method::Conventional) {
+    stage("registration", 0.0);
+    auto t0 = Clock::now();
+    const std::vector<Point3> contacts = conventional_contact_points(raw, *approach_normals, r);
+    const cad::ModelLocator locator(work);
+    check_points_near(locator, contacts, options.registration.initial, options.max_initial_distance_fraction);
+    out.registration = registration::register_points(locator, contacts, options.registration);
+    check_registration(out.registration);
+    out.seconds.registration = since(t0);
+    for (std::size_t k = 0; k < raw.size(); ++k) {
+      const registration::PointMatch& m = out.registration.matches[k];
+      CompensatedPoint& c = out.points[k];
+      if (!m.ok() || !contacts[k].allFinite()) continue;
+      c.status = m.on_edge ? PointStatus::Edge : PointStatus::Ok;
+      c.contact = contacts[k];
+      c.normal = (*approach_normals)[k].normalized();
+      c.deviation = m.distance;
+      c.face = work.faces[static_cast<std::size_t>(m.face)].index;
+      FaceReport& rep = reports[m.face];
+      rep.face = c.face;
+      rep.outward = work.faces[static_cast<std::size_t>(m.face)].outward;
+      ++rep.points;
+    }
+    for (auto& [f, rep] : reports) out.faces.push_back(std::move(rep));
+    return out;
+  }
+
+  // --- CAD-based method ---
+  stage("material side", 0.0);
+  auto t0 = Clock::now();
+  out.material = registration::decide_material_side(work, raw, approach_normals, options.registration.initial);
+  out.seconds.material_side = since(t0);
+
+  stage("offset model", 0.05);
+  t0 = Clock::now();
+  const cad::OffsetModel offset = cad::offset_model(work, r, options.offset);
+  const cad::ModelLocator locator(offset.model);
+  out.seconds.offset = since(t0);
+
+  stage("registration", 0.15);
+  t0 = Clock::now();
+  check_points_near(locator, raw, options.registration.initial, options.max_initial_distance_fraction);
+  out.registration = registration::register_to_offset_model(offset, locator, raw, options.registration);
+  check_registration(out.registration);
+  const registration::RigidTransform T = out.registration.transform;
+  out.seconds.registration = since(t0);
+
+  // Points by face (their correspondences); edge points are compensated towards the edge, never fitted.
+  std::map<int, std::vector<std::size_t>> by_face;
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    const registration::PointMatch& m = out.registration.matches[k];
+    if (!m.ok() || !raw[k].allFinite()) continue;
+    FaceReport& rep = reports[m.face];
+    ++rep.points;
+    CompensatedPoint& c = out.points[k];
+    c.face = work.faces[static_cast<std::size_t>(m.face)].index;
+    if (m.on_edge) {
+      const Point3 edge = T * nurbs::evaluate(work.faces[static_cast<std::size_t>(m.face)].surface, m.u, m.v);
+      c.status = PointStatus::Edge;
+      c.normal = (raw[k] - edge).normalized();
+      c.contact = raw[k] - r * c.normal;
+    } else {
+      by_face[m.face].push_back(k);
+    }
+  }
+
+  stage("fitting", 0.35);
+  t0 = Clock::now();
+  double compensation_seconds = 0.0;
+  std::size_t done = 0;
+  for (const auto& [f, members] : by_face) {
+    const cad::Face& face = work.faces[static_cast<std::size_t>(f)];
+    FaceReport& rep = reports[f];
+    rep.outward = face.outward;
+    if (!out.material.empty()) rep.material = out.material[static_cast<std::size_t>(f)].source;
+    const nurbs::Surface& offset_face = offset.model.faces[static_cast<std::size_t>(f)].surface;
+    const double needed = options.min_points_per_control_point * offset_face.num_u() * offset_face.num_v();
+    std::vector<Point3> pts;
+    std::vector<fitting::SurfaceParameter> params;
+    pts.reserve(members.size());
+    params.reserve(members.size());
+    for (std::size_t k : members) {
+      pts.push_back(raw[k]);
+      params.push_back({out.registration.matches[k].u, out.registration.matches[k].v});
+    }
+    std::optional<fitting::AdaptiveFitResult> fit;
+    std::vector<double> weights(members.size(), 1.0);
+    if (static_cast<double>(members.size()) >= needed) {
+      const nurbs::Surface start = nurbs::transformed(offset_face, T);
+      // Outliers are found from the fit's own residuals (the deformation is data, not outliers, so the
+      // registration's residuals cannot tell them), left out, and the face refitted; at most three times.
+      for (int attempt = 0; attempt < 3; ++attempt) {
+        fit = fitting::fit_surface(start, pts, params, weights, options.fit);
+        if (fit->status == fitting::AdaptiveFitResult::Status::NotDone ||
+            fit->status == fitting::AdaptiveFitResult::Status::NumericalError) {
+          break;
+        }
+        const double bound = options.outlier_sigmas * std::max(fit->noise_sigma, options.fit.noise_floor);
+        int flagged = 0;
+        for (std::size_t i = 0; i < members.size(); ++i) {
+          if (weights[i] > 0.0 && std::abs(fit->residuals[i]) > bound) {
+            weights[i] = 0.0;
+            ++flagged;
+          }
+        }
+        if (flagged == 0) break;
+      }
+    }
+    rep.fitted = fit && (fit->status == fitting::AdaptiveFitResult::Status::OK ||
+                         fit->status == fitting::AdaptiveFitResult::Status::NoiseNotReached);
+    const auto tc = Clock::now();
+    if (rep.fitted) {
+      rep.fit_status = fit->status;
+      rep.control_points = fit->control_points;
+      rep.rounds = fit->rounds;
+      rep.rms = fit->rms;
+      rep.max_residual = fit->max_residual;
+      rep.noise_sigma = fit->noise_sigma;
+      rep.centre_surface = fit->surface;
+      const std::vector<ContactPoint> contacts = contact_points(fit->surface, face.outward, r, pts, fit->params);
+      for (std::size_t i = 0; i < members.size(); ++i) {
+        CompensatedPoint& c = out.points[members[i]];
+        if (!contacts[i].ok()) {
+          c.status = PointStatus::Failed;
+          continue;
+        }
+        c.status = weights[i] > 0.0 ? PointStatus::Ok : PointStatus::Outlier;
+        rep.outliers += weights[i] > 0.0 ? 0 : 1;
+        c.contact = contacts[i].contact;
+        c.normal = contacts[i].normal;
+      }
+    } else {
+      // Too few points (or a fit that could not be made): the registered nominal normal.
+      const Eigen::Matrix3d R = T.linear();
+      for (std::size_t i = 0; i < members.size(); ++i) {
+        CompensatedPoint& c = out.points[members[i]];
+        const nurbs::UnitNormal n = nurbs::unit_normal(face.surface, params[i].u, params[i].v);
+        c.status = PointStatus::FewPoints;
+        c.normal = R * (static_cast<double>(face.outward) * n.n);
+        c.contact = raw[members[i]] - r * c.normal;
+      }
+    }
+    compensation_seconds += since(tc);
+    done += members.size();
+    stage("fitting", 0.35 + 0.5 * static_cast<double>(done) / static_cast<double>(raw.size()));
+  }
+  out.seconds.fitting = since(t0) - compensation_seconds;
+  out.seconds.compensation = compensation_seconds;
+
+  stage("deviation", 0.9);
+  t0 = Clock::now();
+  const registration::RigidTransform to_cad = T.inverse();
+  std::vector<FaceDistance> faces;
+  faces.reserve(work.faces.size());
+  for (const cad::Face& face : work.faces) faces.push_back({&face, nullptr});
+  std::vector<char> retry(raw.size(), 0);
+  tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
+    CompensatedPoint& c = out.points[k];
+    if (!c.computed()) return;
+    const registration::PointMatch& m = out.registration.matches[k];
+    const FaceDistance& fd = faces[static_cast<std::size_t>(m.face)];
+    const Point3 x = to_cad * c.contact;
+    const nurbs::ClosestPointResult foot = nurbs::refine_closest_point(fd.face->surface, x, m.u, m.v);
+    if (foot.ok()) {
+      c.deviation = fd.signed_distance(x, foot);
+    } else {
+      retry[k] = 1;
+    }
+  });
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    if (!retry[k]) continue;
+    const registration::PointMatch& m = out.registration.matches[k];
+    const FaceDistance& fd = faces[static_cast<std::size_t>(m.face)];
+    if (!fd.solver) fd.solver = std::make_unique<nurbs::ClosestPointSolver>(fd.face->surface);
+    const Point3 x = to_cad * out.points[k].contact;
+    const nurbs::ClosestPointResult foot = fd.solver->closest_point(x);
+    if (foot.ok()) {
+      out.points[k].deviation = fd.signed_distance(x, foot);
+    } else {
+      out.points[k].status = PointStatus::Failed;
+    }
+  }
+  out.seconds.deviation = since(t0);
+  for (auto& [f, rep] : reports) {
+    rep.face = work.faces[static_cast<std::size_t>(f)].index;
+    rep.outward = work.faces[static_cast<std::size_t>(f)].outward;
+    if (!out.material.empty()) rep.material = out.material[static_cast<std::size_t>(f)].source;
+    out.faces.push_back(std::move(rep));
+  }
+  stage("done", 1.0);
+  return out;
+}
+
+std::vector<nurbs::Surface> fitted_part_surfaces(const CompensationResult& result, double probe_radius,
+                                                 const fitting::OffsetOptions& options) {
+  std::vector<nurbs::Surface> out;
+  for (const FaceReport& f : result.faces) {
+    if (!f.fitted) continue;
+    // The contact surface is the centre surface moved by r into the material, against the outward normal.
+    const fitting::OffsetResult o = fitting::offset_surface(*f.centre_surface, -probe_radius * f.outward, options);
+    if (o.status == fitting::OffsetResult::Status::Degenerate) {
+      throw std::runtime_error("face " + std::to_string(f.face) + ": the fitted surface has no normal somewhere");
+    }
+    out.push_back(o.surface);
+  }
+  return out;
+}
+
+}  // namespace probecomp::compensation

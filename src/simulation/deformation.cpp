@@ -1,0 +1,119 @@
+#include "simulation/deformation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace probecomp::simulation {
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// Displacements below this (mm) are not worth knots: a thousandth of a nanometre.
+constexpr double kNegligible = 1e-9;
+
+// Distance from a Gaussian's centre beyond which a·exp(−r²/2w²) is negligible.
+double reach(double amplitude, double width) {
+  const double ratio = std::abs(amplitude) / kNegligible;
+  return ratio <= 1.0 ? 0.0 : width * std::sqrt(2.0 * std::log(ratio));
+}
+
+double gaussian(const Point3& x, const Point3& c, double w) { return std::exp(-(x - c).squaredNorm() / (2.0 * w * w)); }
+
+// Knots to insert in one direction so that every span is short enough for the deformation. `samples` are the
+// surface's points on a grid of `per_span` parameters per span (plus the end) along this direction (index a)
+// by `rows` along the other (index b): point (a, b) at samples[a * rows + b].
+std::vector<double> refining_knots(const std::vector<double>& breaks, int per_span, const std::vector<Point3>& samples,
+                                   int rows, const Deformation& d) {
+  std::vector<double> X;
+  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
+    int pieces = 1;
+    for (int b = 0; b < rows; ++b) {
+      double length = 0.0, feature = kInfinity;
+      for (int k = 0; k <= per_span; ++k) {
+        const std::size_t a = s * static_cast<std::size_t>(per_span) + static_cast<std::size_t>(k);
+        const Point3& x = samples[a * static_cast<std::size_t>(rows) + static_cast<std::size_t>(b)];
+        feature = std::min(feature, d.feature_length(x));
+        if (k > 0) length += (x - samples[(a - 1) * static_cast<std::size_t>(rows) + static_cast<std::size_t>(b)]).norm();
+      }
+      if (std::isfinite(feature)) {
+        pieces = std::max(pieces, static_cast<int>(std::ceil(length * kSpansPerFeature / feature)));
+      }
+    }
+    for (int k = 1; k < pieces; ++k) X.push_back(breaks[s] + (breaks[s + 1] - breaks[s]) * k / pieces);
+  }
+  return X;
+}
+
+std::vector<double> sample_parameters(const std::vector<double>& breaks, int per_span) {
+  std::vector<double> t;
+  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
+    for (int k = 0; k < per_span; ++k) t.push_back(breaks[s] + (breaks[s + 1] - breaks[s]) * k / per_span);
+  }
+  t.push_back(breaks.back());
+  return t;
+}
+
+}  // namespace
+
+double Deformation::displacement(const Point3& x) const {
+  double d = 0.0;
+  for (const Bump& b : bumps) d += b.amplitude * gaussian(x, b.centre, b.width);
+  for (const Sinusoid& s : sinusoids) {
+    const double phase = 2.0 * std::numbers::pi * s.direction.normalized().dot(x - s.origin) / s.wavelength;
+    d += s.amplitude * std::sin(phase) * (s.window > 0.0 ? gaussian(x, s.origin, s.window) : 1.0);
+  }
+  return d;
+}
+
+double Deformation::feature_length(const Point3& x) const {
+  double length = kInfinity;
+  for (const Bump& b : bumps) {
+    if ((x - b.centre).norm() <= reach(b.amplitude, b.width)) length = std::min(length, b.width);
+  }
+  for (const Sinusoid& s : sinusoids) {
+    if (s.window > 0.0 && (x - s.origin).norm() > reach(s.amplitude, s.window)) continue;
+    length = std::min(length, s.wavelength / 4.0);
+    if (s.window > 0.0) length = std::min(length, s.window);
+  }
+  return length;
+}
+
+nurbs::Surface deformed_surface(const nurbs::Surface& s, int outward, const Deformation& d) {
+  if (d.empty()) return s;
+  // Eight samples per span resolve a span's length along a row to well under a per cent.
+  constexpr int kPerSpan = 8;
+  nurbs::Surface refined = s;
+  for (int direction = 0; direction < 2; ++direction) {
+    const std::vector<double> breaks_u = refined.U().breakpoints();
+    const std::vector<double> breaks_v = refined.V().breakpoints();
+    const std::vector<double> tu = sample_parameters(breaks_u, kPerSpan);
+    const std::vector<double> tv = sample_parameters(breaks_v, kPerSpan);
+    const bool along_u = direction == 0;
+    const std::vector<double>& ta = along_u ? tu : tv;
+    const std::vector<double>& tb = along_u ? tv : tu;
+    std::vector<Point3> samples;
+    samples.reserve(ta.size() * tb.size());
+    for (double a : ta) {
+      for (double b : tb) samples.push_back(nurbs::evaluate(refined, along_u ? a : b, along_u ? b : a));
+    }
+    const std::vector<double> X =
+        refining_knots(along_u ? breaks_u : breaks_v, kPerSpan, samples, static_cast<int>(tb.size()), d);
+    if (!X.empty()) refined = along_u ? nurbs::refine_knots_u(refined, X) : nurbs::refine_knots_v(refined, X);
+  }
+  std::vector<HomogeneousPoint> Pw = refined.homogeneous();
+  for (int i = 0; i < refined.num_u(); ++i) {
+    const double u = refined.U().greville(i);
+    for (int j = 0; j < refined.num_v(); ++j) {
+      const double v = refined.V().greville(j);
+      const Point3 x = nurbs::evaluate(refined, u, v);
+      const nurbs::UnitNormal n = nurbs::unit_normal(refined, u, v);
+      HomogeneousPoint& q = Pw[static_cast<std::size_t>(i * refined.num_v() + j)];
+      q.head<3>() += q.w() * d.displacement(x) * static_cast<double>(outward) * n.n;
+    }
+  }
+  return nurbs::Surface(refined.U(), refined.V(), std::move(Pw));
+}
+
+}  // namespace probecomp::simulation

@@ -1,0 +1,93 @@
+#include "simulation/measure.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <random>
+
+namespace probecomp::simulation {
+
+namespace {
+
+// Newton on the travel stops when a step is below this (mm); the touch is then accepted if the tip is within
+// kTouchTolerance of the part. Far below any CMM's resolution.
+constexpr double kTravelTolerance = 1e-11;
+constexpr double kTouchTolerance = 1e-9;
+constexpr int kMaxNewtonSteps = 60;
+// Lines meeting the offset part at a grazing angle (cosine below this) are reported as missed, not solved.
+constexpr double kGrazingCosine = 1e-3;
+
+Touch touch(const cad::ModelLocator& actual, const ProgrammedPoint& programmed, double r) {
+  Touch out;
+  const Vector3 n0 = programmed.normal.normalized();
+  double t = r;  // start where the tip would touch the nominal part
+  cad::ModelPoint foot;
+  for (int step = 0; step < kMaxNewtonSteps; ++step) {
+    const Point3 c = programmed.point + t * n0;
+    foot = step == 0 ? actual.closest_point(c) : actual.closest_point(c, foot);
+    if (!foot.ok()) return out;
+    // The gradient of the signed distance: the unit vector from the foot point, or the face normal when the
+    // centre is on the part.
+    const Vector3 g = std::abs(foot.distance) > 1e-12 ? Vector3((c - foot.point) / foot.distance) : foot.normal;
+    const double slope = g.dot(n0);
+    if (slope < kGrazingCosine) return out;
+    const double dt = -(foot.distance - r) / slope;
+    t += dt;
+    if (std::abs(dt) < kTravelTolerance) {
+      const Point3 centre = programmed.point + t * n0;
+      const cad::ModelPoint last = actual.closest_point(centre, foot);
+      if (!last.ok() || std::abs(last.distance - r) > kTouchTolerance) return out;
+      const bool edge = last.on_trim_edge || last.status == nurbs::ClosestPointStatus::OnBoundary;
+      out.status = edge ? Touch::Status::Edge : Touch::Status::OK;
+      out.centre = centre;
+      out.measured = centre;
+      out.contact = last.point;
+      out.normal = edge ? Vector3((centre - last.point).normalized()) : last.normal;
+      out.face = last.face;
+      out.u = last.u;
+      out.v = last.v;
+      out.travel = t;
+      return out;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+const char* to_string(Touch::Status s) {
+  switch (s) {
+    case Touch::Status::OK: return "ok";
+    case Touch::Status::Edge: return "edge";
+    case Touch::Status::Missed: return "missed";
+  }
+  return "?";
+}
+
+std::vector<Touch> simulate_touches(const cad::ModelLocator& actual, std::span<const ProgrammedPoint> plan,
+                                    const MeasurementOptions& options) {
+  std::vector<Touch> out(plan.size());
+  tbb::parallel_for(std::size_t{0}, plan.size(),
+                    [&](std::size_t k) { out[k] = touch(actual, plan[k], options.probe_radius); });
+  if (options.noise_sigma > 0.0) {
+    std::mt19937_64 rng(options.seed);
+    std::normal_distribution<double> noise(0.0, options.noise_sigma);
+    for (Touch& t : out) {
+      // Drawn for every point, touched or not, so that one point's noise does not depend on another's touch.
+      const Vector3 e(noise(rng), noise(rng), noise(rng));
+      if (t.status != Touch::Status::Missed) t.measured = t.centre + e;
+    }
+  }
+  return out;
+}
+
+cad::Model actual_model(const cad::Model& nominal, const Deformation& deformation,
+                        const registration::RigidTransform& placement) {
+  cad::Model out = nominal;
+  for (cad::Face& face : out.faces) {
+    face.surface = nurbs::transformed(deformed_surface(face.surface, face.outward, deformation), placement);
+  }
+  return out;
+}
+
+}  // namespace probecomp::simulation
