@@ -1,5 +1,5 @@
-// probecomp command-line tool: info, project and plan on CAD models, the paper's studies; later work adds
-// compensate and demo.
+// probecomp command-line tool: compensate, fit and demo (the method end to end), info, project and plan on CAD
+// models, the paper's studies.
 // Every failure is one line on standard error ("probecomp: FILE:LINE: cause") and exit status 1; output files
 // are written whole or not at all.
 
@@ -16,6 +16,8 @@
 #include "cad/locator.hpp"
 #include "cad/model.hpp"
 #include "cad/plan.hpp"
+#include "cli/commands.hpp"
+#include "cli/format.hpp"
 #include "io/point_table.hpp"
 #include "studies/registration_study.hpp"
 #include "version.hpp"
@@ -24,26 +26,10 @@ namespace {
 
 using namespace probecomp;
 
-std::string fmt(const char* format, double value) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, value + 0.0);  // + 0.0 turns −0 into 0
-  return buf;
-}
-std::string mm(double v) { return fmt("%.9f", v); }
-std::string unit(double v) { return fmt("%.12f", v); }
-
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      out += fmt("\\u%04x", static_cast<unsigned char>(c));
-      continue;
-    }
-    out += c;
-  }
-  return out + "\"";
-}
+using cli::fmt;
+using cli::json_string;
+using cli::mm;
+using cli::unit;
 
 // Writes to the file (atomically) or to standard output when no file is given.
 void emit(const std::string& output, const std::string& text) {
@@ -328,12 +314,53 @@ int main(int argc, char** argv) {
   study->add_option("--loss", loss, "Robust weights: cauchy (default), huber, trimmed or none")
       ->check(CLI::IsMember({"cauchy", "huber", "trimmed", "none"}));
 
+  cli::CompensateArgs comp;
+  CLI::App* compensate = app.add_subcommand(
+      "compensate",
+      "Contact points and deviations from raw probe-centre points: every input row back, in order, with "
+      "x,y,z,nx,ny,nz,deviation,face,status and the input's other columns.");
+  compensate->add_option("--cad", comp.cad, "CAD file (.igs, .iges, .stp, .step)")->required();
+  compensate->add_option("--points", comp.points,
+                         "RAW.csv (header naming x,y,z, optional i,j,k; other columns carried) or RAW.dmo (DMIS "
+                         "FA(label)=FEAT/POINT,CART,x,y,z,i,j,k)")
+      ->required();
+  compensate->add_option("--probe-radius", comp.probe_radius, "Tip radius, mm")->required();
+  compensate->add_option("--method", comp.method,
+                         "cad (default): register to the offset model, fit, offset along the fitted normal; "
+                         "conventional: c - r*(i,j,k)")
+      ->check(CLI::IsMember({"cad", "conventional"}));
+  compensate->add_option("--output", comp.output, "OUT.csv or OUT.dmo (default: CSV on standard output)");
+  compensate->add_option("--json", comp.json,
+                         "STATS.json: transform (4x4, CAD to machine), registration, per face fit, counts by status, "
+                         "seconds per stage");
+  compensate->add_option("--report", comp.report, "REPORT.html: a summary for people");
+  compensate->add_flag("--quiet", comp.quiet, "No progress on standard error");
+
+  cli::FitArgs fit_args;
+  CLI::App* fit = app.add_subcommand(
+      "fit", "The as-measured part surfaces (fitted contact surfaces, machine frame) as NURBS in IGES or STEP.");
+  fit->add_option("--cad", fit_args.cad, "CAD file")->required();
+  fit->add_option("--points", fit_args.points, "RAW.csv or RAW.dmo")->required();
+  fit->add_option("--probe-radius", fit_args.probe_radius, "Tip radius, mm")->required();
+  fit->add_option("--output", fit_args.output, "ACTUAL.igs or ACTUAL.stp")->required();
+  fit->add_option("--json", fit_args.json, "STATS.json as for compensate");
+  fit->add_flag("--quiet", fit_args.quiet, "No progress on standard error");
+
+  cli::DemoArgs demo_args;
+  CLI::App* demo = app.add_subcommand(
+      "demo", "The built-in free-form case (paper §7.3): simulate, compensate both ways, print the Table 2 comparison.");
+  demo->add_option("--output-dir", demo_args.output_dir,
+                   "Where nominal.igs, raw.csv and both outputs go (default: probecomp-demo)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
   try {
+    if (compensate->parsed()) return cli::run_compensate(comp);
+    if (fit->parsed()) return cli::run_fit(fit_args);
+    if (demo->parsed()) return cli::run_demo(demo_args);
     if (info->parsed()) return run_info(part, json);
     if (project->parsed()) return run_project(part, points, output);
     if (plan->parsed()) return run_plan(part, spacing, faces, output);

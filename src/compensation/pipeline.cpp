@@ -21,6 +21,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+// Fits made at most per face while peeling outliers off (each refit follows a change in the points left out).
+constexpr int kMaxOutlierFits = 4;
+
 std::string mm(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3g", v);
@@ -220,14 +223,17 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
     if (static_cast<double>(members.size()) >= needed) {
       const nurbs::Surface start = nurbs::transformed(offset_face, T);
       // Outliers are found from the fit's own residuals (the deformation is data, not outliers, so the
-      // registration's residuals cannot tell them), left out, and the face refitted; at most three times.
-      for (int attempt = 0; attempt < 3; ++attempt) {
+      // registration's residuals cannot tell them), left out, and the face refitted, until no new point is
+      // beyond the bound. A point once left out stays out: a fit bent by gross outliers can push good
+      // neighbours beyond the bound too, and those are then reported as outliers (not trusted) rather than
+      // left to oscillate in and out.
+      for (int attempt = 0; attempt < kMaxOutlierFits; ++attempt) {
         fit = fitting::fit_surface(start, pts, params, weights, options.fit);
         if (fit->status == fitting::AdaptiveFitResult::Status::NotDone ||
             fit->status == fitting::AdaptiveFitResult::Status::NumericalError) {
           break;
         }
-        const double bound = options.outlier_sigmas * std::max(fit->noise_sigma, options.fit.noise_floor);
+        const double bound = std::max(options.outlier_sigmas * fit->noise_sigma, options.min_outlier_residual);
         int flagged = 0;
         for (std::size_t i = 0; i < members.size(); ++i) {
           if (weights[i] > 0.0 && std::abs(fit->residuals[i]) > bound) {

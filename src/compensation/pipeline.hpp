@@ -85,6 +85,9 @@ struct CompensateOptions {
   // Residuals beyond this many noise sigmas (of the face's fit) mark outliers: left out of the refit. Five
   // sigmas: a Gaussian exceeds it once in 1.7 million points.
   double outlier_sigmas = 5.0;
+  // ... and beyond this (mm): on noise-free data the fit's own model error (a few tenths of a micrometre where
+  // refinement stopped) must not read as outliers. 2 µm is below any gross error and above that model error.
+  double min_outlier_residual = 0.002;
   // Points whose first closest point on the model is farther than this fraction of the model's size are
   // "nowhere near the model" (wrong file, frame or unit): the run stops with an error.
   double max_initial_distance_fraction = 0.1;

@@ -1,0 +1,30 @@
+#pragma once
+// Number and JSON formatting shared by the commands: lengths with 9 decimals (nm), unit vectors with 12.
+
+#include <cstdio>
+#include <string>
+
+namespace probecomp::cli {
+
+inline std::string fmt(const char* format, double value) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, value + 0.0);  // + 0.0 turns −0 into 0
+  return buf;
+}
+inline std::string mm(double v) { return fmt("%.9f", v); }
+inline std::string unit(double v) { return fmt("%.12f", v); }
+
+inline std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      out += fmt("\\u%04x", static_cast<unsigned char>(c));
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace probecomp::cli

@@ -1,0 +1,65 @@
+#!/bin/sh
+# End to end from the command line: the demo's files through compensate (CSV and DMIS) and fit; bad inputs give
+# one line on standard error, a non-zero exit and no output file.
+# Usage: compensate.sh PROBECOMP CAD_DIR WORK_DIR
+set -u
+P=$1; CAD=$2; W=$3
+rm -rf "$W"; mkdir -p "$W"
+fail=0
+check() { if ! eval "$1"; then echo "FAIL: $2"; fail=1; fi; }
+"$P" demo --output-dir "$W/demo" >"$W/demo.txt" || { echo "FAIL: demo"; exit 1; }
+check "grep -q 'CAD-based (probecomp)' '$W/demo.txt'" "demo prints the comparison"
+for f in nominal.igs raw.csv compensated_cad.csv compensated_conventional.csv; do
+  check "[ -s '$W/demo/$f' ]" "demo wrote $f"
+done
+# Carried columns come back; every row in order.
+awk -F, 'NR==1{print $0",id"; next} {print $0","NR-1}' "$W/demo/raw.csv" >"$W/raw_id.csv"
+"$P" compensate --cad "$W/demo/nominal.igs" --points "$W/raw_id.csv" --probe-radius 1 --output "$W/out.csv" \
+  --json "$W/stats.json" --report "$W/report.html" --quiet || { echo "FAIL: compensate"; fail=1; }
+check "[ \$(wc -l <'$W/out.csv') -eq \$(wc -l <'$W/raw_id.csv') ]" "one output row per input row"
+check "head -1 '$W/out.csv' | grep -q '^x,y,z,nx,ny,nz,deviation,face,status,id$'" "output header"
+check "tail -1 '$W/out.csv' | grep -q ',ok,7200$'" "last row carries its id"
+for key in '"transform"' '"registration"' '"converged": true' '"control_points"' '"noise_estimate"' '"counts"' '"seconds"'; do
+  check "grep -q '$key' '$W/stats.json'" "stats has $key"
+done
+check "grep -q '<table' '$W/report.html'" "report written"
+# DMIS out, then DMIS in: the same points.
+"$P" compensate --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/out.dmo" || fail=1
+check "[ \$(grep -c '^FA(P' '$W/out.dmo') -eq 7200 ]" "DMIS output has every point"
+"$P" compensate --cad "$W/demo/nominal.igs" --points "$W/out.dmo" --probe-radius 0.001 --method conventional \
+  --output "$W/again.csv" || { echo "FAIL: DMIS input"; fail=1; }
+check "[ \$(wc -l <'$W/again.csv') -eq 7201 ]" "DMIS input read"
+# Conventional: the demo's own conventional output is reproduced.
+"$P" compensate --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --method conventional >"$W/conv.csv" || fail=1
+check "[ \$(wc -l <'$W/conv.csv') -eq 7201 ]" "conventional to standard output"
+# fit: the measured surface as IGES, readable again.
+"$P" fit --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/actual.igs" --quiet || fail=1
+check "'$P' info '$W/actual.igs' | grep -q 'total: 1 faces'" "fit wrote one NURBS face"
+
+expect_error() {  # expect_error TEXT_IN_MESSAGE OUTPUT_FILE command...
+  text=$1; out=$2; shift 2
+  "$@" >"$W/stdout" 2>"$W/stderr"; rc=$?
+  lines=$(wc -l <"$W/stderr")
+  if [ $rc -eq 0 ]; then echo "FAIL (exit 0): $*"; fail=1; fi
+  if [ "$lines" -ne 1 ]; then echo "FAIL ($lines lines on stderr): $*"; cat "$W/stderr"; fail=1; fi
+  if ! grep -q -- "$text" "$W/stderr"; then echo "FAIL (no '$text' in message): $*"; cat "$W/stderr"; fail=1; fi
+  if [ -n "$out" ] && ls "$out"* >/dev/null 2>&1; then echo "FAIL (output left behind): $*"; fail=1; fi
+}
+N="$W/demo/nominal.igs"
+printf 'x,y,z\n1,2,3\n4,nan,6\n' >"$W/nan.csv"
+printf 'x,y,z\n' >"$W/empty.csv"
+printf 'x,y,z\n1000,1000,1000\n1001,1000,1000\n1002,1000,1000\n' >"$W/far.csv"
+cut -d, -f1-3 "$W/demo/raw.csv" >"$W/no_ijk.csv"
+printf 'ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((%s),%s);\nFILE_NAME(%s,%s,(%s),(%s),%s,%s,%s);\nFILE_SCHEMA((%s));\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT(%s,(0.,0.,0.));\nENDSEC;\nEND-ISO-10303-21;\n' \
+  "''" "'2;1'" "'p.stp'" "''" "''" "''" "''" "''" "''" "'CONFIG_CONTROL_DESIGN'" "''" >"$W/no_surfaces.stp"
+expect_error "probe-radius" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/demo/raw.csv" --probe-radius 0 --output "$W/o.csv"
+expect_error "probe-radius" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/demo/raw.csv" --probe-radius -1 --output "$W/o.csv"
+expect_error "missing.csv" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/missing.csv" --probe-radius 1 --output "$W/o.csv"
+expect_error "missing.igs" "$W/o.csv" "$P" compensate --cad "$W/missing.igs" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/o.csv"
+expect_error "nan.csv:3" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/nan.csv" --probe-radius 1 --output "$W/o.csv"
+expect_error "no points" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/empty.csv" --probe-radius 1 --output "$W/o.csv"
+expect_error "nowhere near" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/far.csv" --probe-radius 1 --output "$W/o.csv"
+expect_error "no_surfaces.stp" "$W/o.csv" "$P" compensate --cad "$W/no_surfaces.stp" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/o.csv"
+expect_error "i,j,k" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/no_ijk.csv" --probe-radius 1 --method conventional --output "$W/o.csv"
+expect_error ".igs, .iges" "$W/a.txt" "$P" fit --cad "$N" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/a.txt"
+exit $fail

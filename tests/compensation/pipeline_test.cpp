@@ -1,0 +1,142 @@
+// The whole method end to end on simulated measurements (the simulator is checked on its own in
+// tests/simulation): errors are signed distances of the compensated points from the actual surface, which the
+// simulator knows exactly.
+
+#include "compensation/pipeline.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "cad/locator.hpp"
+#include "cad/plan.hpp"
+#include "studies/freeform_study.hpp"
+
+namespace probecomp {
+namespace {
+
+using compensation::PointStatus;
+
+// The bars for the free-form case: CAD-based std ≤ 2 µm, |mean| ≤ 1 µm, max |error| ≤ 10 µm, and std and
+// max |error| each at least 3× better than the conventional method on the same data.
+void expect_freeform_bars(const studies::FreeformStudyResult& r) {
+  const studies::ErrorSummary& cad = r.cad_summary;
+  const studies::ErrorSummary& conv = r.conventional_summary;
+  EXPECT_EQ(r.cad.points.size(), r.plan.size());  // every row back
+  EXPECT_EQ(cad.points, static_cast<int>(r.plan.size())) << "every point trusted";
+  EXPECT_LE(cad.std, 0.002);
+  EXPECT_LE(std::abs(cad.mean), 0.001);
+  EXPECT_LE(cad.max_abs(), 0.010);
+  EXPECT_GE(conv.std, 3.0 * cad.std);
+  EXPECT_GE(conv.max_abs(), 3.0 * cad.max_abs());
+  EXPECT_TRUE(r.cad.registration.converged()) << r.cad.registration.stop_reason;
+  std::printf("cad std %.6f mean %.6f max %.6f | conventional std %.6f max %.6f\n", cad.std, cad.mean, cad.max_abs(),
+              conv.std, conv.max_abs());
+}
+
+TEST(Pipeline, FreeformCaseOnTheGridMeetsTheBars) { expect_freeform_bars(studies::run_freeform_study()); }
+
+TEST(Pipeline, FreeformCaseWithAnotherNoiseDrawMeetsTheBars) {
+  studies::FreeformStudyOptions o;
+  o.seed = 7;
+  expect_freeform_bars(studies::run_freeform_study(o));
+}
+
+TEST(Pipeline, RandomShuffledPointsWithoutApproachNormalsMeetTheBars) {
+  studies::FreeformStudyOptions o;
+  o.random_points = 6000;
+  o.shuffle = true;
+  o.approach_normals = false;
+  const studies::FreeformStudyResult r = studies::run_freeform_study(o);
+  expect_freeform_bars(r);
+  EXPECT_EQ(r.cad.material.at(0).source, registration::MaterialSource::Data);
+}
+
+TEST(Pipeline, SurfaceWhoseNormalPointsIntoTheMaterialMeetsTheBars) {
+  studies::FreeformStudyOptions o;
+  o.reversed = true;
+  const studies::FreeformStudyResult r = studies::run_freeform_study(o);
+  expect_freeform_bars(r);
+  EXPECT_EQ(r.cad.faces.at(0).outward, -1);
+  // The normals given out point away from the material (towards the probe): +z for this panel.
+  for (const auto& p : r.cad.points) ASSERT_GT(p.normal.z(), 0.5);
+}
+
+TEST(Pipeline, NoiseFreeDataAreCompensatedToASmallFractionOfAMicrometre) {
+  studies::FreeformStudyOptions o;
+  o.noise_sigma = 0.0;
+  const studies::FreeformStudyResult r = studies::run_freeform_study(o);
+  EXPECT_EQ(r.cad.count(PointStatus::Ok), static_cast<int>(r.plan.size())) << "no outliers in noise-free data";
+  EXPECT_LE(r.cad_summary.max_abs(), 1e-3);
+}
+
+TEST(Pipeline, ConventionalMethodWithoutApproachNormalsSaysWhy) {
+  const simulation::FreeformCase c = simulation::paper_freeform_case();
+  const std::vector<Point3> raw{Point3(0, 0, 1)};
+  compensation::CompensateOptions o;
+  o.method = compensation::Method::Conventional;
+  o.probe_radius = 1.0;
+  try {
+    (void)compensation::compensate(c.nominal, raw, std::nullopt, o);
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("i,j,k"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Pipeline, PointsFarFromTheModelAreAnError) {
+  const simulation::FreeformCase c = simulation::paper_freeform_case();
+  std::vector<Point3> raw;
+  for (int k = 0; k < 100; ++k) raw.emplace_back(1000.0 + k, 0.0, 500.0);
+  compensation::CompensateOptions o;
+  o.probe_radius = 1.0;
+  EXPECT_THROW((void)compensation::compensate(c.nominal, raw, std::nullopt, o), std::invalid_argument);
+}
+
+// A multi-face part from a real STEP file: the top (a bicubic B-spline) and two trimmed side planes of
+// AnalysisSitus's wavy cube (1 mm), probe radius 0.1 mm, misaligned by 5 µm and 0.3°, σ = 0.5 µm.
+TEST(Pipeline, MultiFaceStepPartLandsEveryPointOnItsFace) {
+  const cad::Model nominal = cad::read_model(std::filesystem::path(PROBECOMP_TEST_CAD_DIR) / "asitus_wavy-cube.stp");
+  const std::vector<cad::PlannedPoint> planned = cad::plan_points(nominal, 0.025, {2, 3, 5});
+  std::vector<simulation::ProgrammedPoint> plan;
+  for (const auto& p : planned) plan.push_back({p.point, p.normal, p.face});
+  const registration::RigidTransform placement =
+      registration::from_pose({.rx = 0.3, .ry = -0.2, .rz = 0.1, .t = Vector3(0.005, -0.003, 0.004)});
+  const cad::Model actual = simulation::actual_model(nominal, {}, placement);
+  const cad::ModelLocator actual_locator(actual);
+  const double sigma = 0.0005;
+  const auto touches = simulation::simulate_touches(actual_locator, plan, {.probe_radius = 0.1, .noise_sigma = sigma, .seed = 2});
+  std::vector<Point3> raw;
+  std::vector<Vector3> normals;
+  for (std::size_t k = 0; k < touches.size(); ++k) {
+    raw.push_back(touches[k].measured);
+    normals.push_back(plan[k].normal);
+  }
+  compensation::CompensateOptions o;
+  o.probe_radius = 0.1;
+  const auto r = compensation::compensate(nominal, raw, std::span<const Vector3>(normals), o);
+  ASSERT_EQ(r.points.size(), raw.size());
+  int compared = 0, wrong_face = 0;
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    if (touches[k].status != simulation::Touch::Status::OK) continue;
+    if (r.points[k].status == PointStatus::Edge) continue;  // the tip reached past an edge: reported, not judged
+    ++compared;
+    wrong_face += r.points[k].face != touches[k].face;
+    ASSERT_EQ(r.points[k].status, PointStatus::Ok) << k;
+    errors.push_back(actual_locator.closest_point(r.points[k].contact).distance);
+  }
+  EXPECT_EQ(wrong_face, 0);
+  EXPECT_GE(compared, static_cast<int>(0.8 * static_cast<double>(raw.size())));
+  const studies::ErrorSummary e = studies::summarise(errors);
+  std::printf("multi-face: %d points compared, error std %.2e mean %.2e max %.2e (sigma %.1e)\n", compared, e.std,
+              e.mean, e.max_abs(), sigma);
+  EXPECT_LT(e.std, sigma);  // smoothing removes noise
+  EXPECT_LT(e.max_abs(), 3.0 * sigma);
+  int fitted = 0;
+  for (const auto& f : r.faces) fitted += f.fitted;
+  EXPECT_GE(fitted, 2);
+}
+
+}  // namespace
+}  // namespace probecomp
