@@ -12,6 +12,7 @@
 #include "compensation/pipeline.hpp"
 #include "io/dmis.hpp"
 #include "io/point_table.hpp"
+#include "io/text.hpp"
 #include "studies/freeform_study.hpp"
 
 namespace probecomp::cli {
@@ -38,16 +39,14 @@ void check_radius(double r) {
 }
 
 bool has_extension(const std::string& path, std::initializer_list<const char*> extensions) {
-  std::string e = std::filesystem::path(path).extension().string();
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string e = io::lower(std::filesystem::path(path).extension().string());
   return std::any_of(extensions.begin(), extensions.end(), [&](const char* x) { return e == x; });
 }
 
 // The output's label for row k: the input's label or id column, else P1, P2, ...
 std::string row_label(const io::PointTable& t, std::size_t k) {
   for (std::size_t c = 0; c < t.columns.size(); ++c) {
-    std::string n = t.columns[c];
-    std::transform(n.begin(), n.end(), n.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+    const std::string n = io::lower(t.columns[c]);
     if (n == "label" || n == "id") return t.rows[k][c];
   }
   std::string label = "P";
@@ -272,7 +271,7 @@ int run_demo(const DemoArgs& a) {
   std::filesystem::create_directories(a.output_dir);
   const std::filesystem::path dir(a.output_dir);
   cad::write_surfaces(dir / "nominal.igs", {c.nominal.faces.front().surface});
-  io::PointTable table;
+  io::PointTable table;  // raw.csv's layout: no carried columns, so csv_output reads no row fields
   table.columns = {"x", "y", "z", "i", "j", "k"};
   std::ostringstream raw;
   raw << "x,y,z,i,j,k\n";
@@ -281,7 +280,6 @@ int run_demo(const DemoArgs& a) {
     const Vector3& n = r.plan[k].normal;
     raw << mm(x.x()) << ',' << mm(x.y()) << ',' << mm(x.z()) << ',' << unit(n.x()) << ',' << unit(n.y()) << ','
         << unit(n.z()) << '\n';
-    table.rows.push_back({});
   }
   io::write_file_atomically(dir / "raw.csv", raw.str());
   io::write_file_atomically(dir / "compensated_cad.csv", csv_output(table, r.cad));

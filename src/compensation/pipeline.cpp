@@ -75,18 +75,12 @@ void check_registration(const registration::RegistrationResult& r) {
   }
 }
 
-// Signed distance of x (CAD frame) from face `face`, by Newton from (u0, v0), with the global search where that
-// fails. + on the outward side.
-struct FaceDistance {
-  const cad::Face* face;
-  mutable std::unique_ptr<nurbs::ClosestPointSolver> solver;  // built on first need
-
-  [[nodiscard]] double signed_distance(const Point3& x, const nurbs::ClosestPointResult& r) const {
-    const nurbs::UnitNormal n = nurbs::unit_normal(face->surface, r.u, r.v);
-    const double side = (x - r.point).dot(static_cast<double>(face->outward) * n.n);
-    return side < 0.0 ? -r.distance : r.distance;
-  }
-};
+// The distance of x from its foot point on `face`, + on the outward side.
+double signed_distance(const cad::Face& face, const Point3& x, const nurbs::ClosestPointResult& foot) {
+  const nurbs::UnitNormal n = nurbs::unit_normal(face.surface, foot.u, foot.v);
+  const double side = (x - foot.point).dot(static_cast<double>(face.outward) * n.n);
+  return side < 0.0 ? -foot.distance : foot.distance;
+}
 
 }  // namespace
 
@@ -130,14 +124,13 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   CompensationResult out;
   out.method = options.method;
   out.points.resize(raw.size());
-  cad::Model work = model;
   std::map<int, FaceReport> reports;  // by position in model.faces
 
   if (options.method == Method::Conventional) {
     stage("registration", 0.0);
     auto t0 = Clock::now();
     const std::vector<Point3> contacts = conventional_contact_points(raw, *approach_normals, r);
-    const cad::ModelLocator locator(work);
+    const cad::ModelLocator locator(model);
     check_points_near(locator, contacts, options.registration.initial, options.max_initial_distance_fraction);
     out.registration = registration::register_points(locator, contacts, options.registration);
     check_registration(out.registration);
@@ -150,19 +143,20 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
       c.contact = contacts[k];
       c.normal = (*approach_normals)[k].normalized();
       c.deviation = m.distance;
-      c.face = work.faces[static_cast<std::size_t>(m.face)].index;
+      c.face = model.faces[static_cast<std::size_t>(m.face)].index;
       FaceReport& rep = reports[m.face];
       rep.face = c.face;
-      rep.outward = work.faces[static_cast<std::size_t>(m.face)].outward;
+      rep.outward = model.faces[static_cast<std::size_t>(m.face)].outward;
       ++rep.points;
     }
     for (auto& [f, rep] : reports) out.faces.push_back(std::move(rep));
     return out;
   }
 
-  // --- CAD-based method ---
+  // --- CAD-based method --- (on a copy: the material side is decided into its faces' `outward`)
   stage("material side", 0.0);
   auto t0 = Clock::now();
+  cad::Model work = model;
   out.material = registration::decide_material_side(work, raw, approach_normals, options.registration.initial);
   out.seconds.material_side = since(t0);
 
@@ -206,8 +200,6 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   for (const auto& [f, members] : by_face) {
     const cad::Face& face = work.faces[static_cast<std::size_t>(f)];
     FaceReport& rep = reports[f];
-    rep.outward = face.outward;
-    if (!out.material.empty()) rep.material = out.material[static_cast<std::size_t>(f)].source;
     const nurbs::Surface& offset_face = offset.model.faces[static_cast<std::size_t>(f)].surface;
     const double needed = options.min_points_per_control_point * offset_face.num_u() * offset_face.num_v();
     std::vector<Point3> pts;
@@ -287,33 +279,33 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
 
   stage("deviation", 0.9);
   t0 = Clock::now();
+  // Newton from the correspondence's (u, v) (nominal and offset faces share their parametrisation), with the
+  // face's global search where Newton fails.
   const registration::RigidTransform to_cad = T.inverse();
-  std::vector<FaceDistance> faces;
-  faces.reserve(work.faces.size());
-  for (const cad::Face& face : work.faces) faces.push_back({&face, nullptr});
   std::vector<char> retry(raw.size(), 0);
   tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
     CompensatedPoint& c = out.points[k];
     if (!c.computed()) return;
     const registration::PointMatch& m = out.registration.matches[k];
-    const FaceDistance& fd = faces[static_cast<std::size_t>(m.face)];
+    const cad::Face& face = work.faces[static_cast<std::size_t>(m.face)];
     const Point3 x = to_cad * c.contact;
-    const nurbs::ClosestPointResult foot = nurbs::refine_closest_point(fd.face->surface, x, m.u, m.v);
+    const nurbs::ClosestPointResult foot = nurbs::refine_closest_point(face.surface, x, m.u, m.v);
     if (foot.ok()) {
-      c.deviation = fd.signed_distance(x, foot);
+      c.deviation = signed_distance(face, x, foot);
     } else {
       retry[k] = 1;
     }
   });
+  std::map<int, nurbs::ClosestPointSolver> solvers;  // built for the faces that need one
   for (std::size_t k = 0; k < raw.size(); ++k) {
     if (!retry[k]) continue;
     const registration::PointMatch& m = out.registration.matches[k];
-    const FaceDistance& fd = faces[static_cast<std::size_t>(m.face)];
-    if (!fd.solver) fd.solver = std::make_unique<nurbs::ClosestPointSolver>(fd.face->surface);
+    const cad::Face& face = work.faces[static_cast<std::size_t>(m.face)];
+    const nurbs::ClosestPointSolver& solver = solvers.try_emplace(m.face, face.surface).first->second;
     const Point3 x = to_cad * out.points[k].contact;
-    const nurbs::ClosestPointResult foot = fd.solver->closest_point(x);
+    const nurbs::ClosestPointResult foot = solver.closest_point(x);
     if (foot.ok()) {
-      out.points[k].deviation = fd.signed_distance(x, foot);
+      out.points[k].deviation = signed_distance(face, x, foot);
     } else {
       out.points[k].status = PointStatus::Failed;
     }

@@ -35,16 +35,6 @@ using nurbs::Surface;
 // a surface that needs more is not smooth enough for its offset to be approximated (e.g. a C⁰ crease).
 constexpr double kMaxControlPoints = 250'000;
 
-// `per_span` parameters in each knot span at its start and equal steps, and the domain's end.
-std::vector<double> span_parameters(const std::vector<double>& breaks, int per_span) {
-  std::vector<double> t;
-  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
-    for (int m = 0; m < per_span; ++m) t.push_back(breaks[s] + (breaks[s + 1] - breaks[s]) * m / per_span);
-  }
-  t.push_back(breaks.back());
-  return t;
-}
-
 // `per_span` parameters inside each span, at the middles of equal steps (never on a sample), with their span.
 std::vector<std::pair<double, int>> check_parameters(const std::vector<double>& breaks, int per_span) {
   std::vector<std::pair<double, int>> t;

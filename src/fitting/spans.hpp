@@ -1,5 +1,5 @@
 #pragma once
-// Knot-span helpers shared by the refining fitters (offset_surface, fit_surface).
+// Knot-span helpers shared by the refining fitters (offset_surface, fit_surface) and the simulator's refinement.
 
 #include <vector>
 
@@ -14,6 +14,16 @@ namespace probecomp::fitting {
     if (flagged[s]) X.push_back(0.5 * (breaks[s] + breaks[s + 1]));
   }
   return X;
+}
+
+// `per_span` parameters in each knot span, at its start and in equal steps, and the domain's end.
+[[nodiscard]] inline std::vector<double> span_parameters(const std::vector<double>& breaks, int per_span) {
+  std::vector<double> t;
+  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
+    for (int m = 0; m < per_span; ++m) t.push_back(breaks[s] + (breaks[s + 1] - breaks[s]) * m / per_span);
+  }
+  t.push_back(breaks.back());
+  return t;
 }
 
 }  // namespace probecomp::fitting

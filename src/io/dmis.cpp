@@ -8,21 +8,11 @@
 #include <optional>
 #include <sstream>
 
+#include "io/text.hpp"
+
 namespace probecomp::io {
 
 namespace {
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return {};
-  const auto e = s.find_last_not_of(" \t\r");
-  return s.substr(b, e - b + 1);
-}
-
-std::string upper(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-  return s;
-}
 
 std::string without_spaces(const std::string& s) {
   std::string out;

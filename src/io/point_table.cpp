@@ -7,16 +7,11 @@
 #include <fstream>
 #include <sstream>
 
+#include "io/text.hpp"
+
 namespace probecomp::io {
 
 namespace {
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return {};
-  const auto e = s.find_last_not_of(" \t\r");
-  return s.substr(b, e - b + 1);
-}
 
 std::vector<std::string> split(const std::string& line) {
   std::vector<std::string> out;
@@ -25,11 +20,6 @@ std::vector<std::string> split(const std::string& line) {
   while (std::getline(in, field, ',')) out.push_back(trim(field));
   if (!line.empty() && line.back() == ',') out.emplace_back();
   return out;
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
 }
 
 }  // namespace

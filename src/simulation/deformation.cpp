@@ -5,6 +5,8 @@
 #include <limits>
 #include <numbers>
 
+#include "fitting/spans.hpp"
+
 namespace probecomp::simulation {
 
 namespace {
@@ -46,15 +48,6 @@ std::vector<double> refining_knots(const std::vector<double>& breaks, int per_sp
   return X;
 }
 
-std::vector<double> sample_parameters(const std::vector<double>& breaks, int per_span) {
-  std::vector<double> t;
-  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
-    for (int k = 0; k < per_span; ++k) t.push_back(breaks[s] + (breaks[s + 1] - breaks[s]) * k / per_span);
-  }
-  t.push_back(breaks.back());
-  return t;
-}
-
 }  // namespace
 
 double Deformation::displacement(const Point3& x) const {
@@ -88,8 +81,8 @@ nurbs::Surface deformed_surface(const nurbs::Surface& s, int outward, const Defo
   for (int direction = 0; direction < 2; ++direction) {
     const std::vector<double> breaks_u = refined.U().breakpoints();
     const std::vector<double> breaks_v = refined.V().breakpoints();
-    const std::vector<double> tu = sample_parameters(breaks_u, kPerSpan);
-    const std::vector<double> tv = sample_parameters(breaks_v, kPerSpan);
+    const std::vector<double> tu = fitting::span_parameters(breaks_u, kPerSpan);
+    const std::vector<double> tv = fitting::span_parameters(breaks_v, kPerSpan);
     const bool along_u = direction == 0;
     const std::vector<double>& ta = along_u ? tu : tv;
     const std::vector<double>& tb = along_u ? tv : tu;

@@ -6,6 +6,7 @@ set -u
 P=$1; CAD=$2; W=$3
 rm -rf "$W"; mkdir -p "$W"
 fail=0
+. "$(dirname "$0")/lib.sh"
 check() { if ! eval "$1"; then echo "FAIL: $2"; fail=1; fi; }
 "$P" demo --output-dir "$W/demo" >"$W/demo.txt" || { echo "FAIL: demo"; exit 1; }
 check "grep -q 'CAD-based (probecomp)' '$W/demo.txt'" "demo prints the comparison"
@@ -36,15 +37,6 @@ check "[ \$(wc -l <'$W/conv.csv') -eq 7201 ]" "conventional to standard output"
 "$P" fit --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/actual.igs" --quiet || fail=1
 check "'$P' info '$W/actual.igs' | grep -q 'total: 1 faces'" "fit wrote one NURBS face"
 
-expect_error() {  # expect_error TEXT_IN_MESSAGE OUTPUT_FILE command...
-  text=$1; out=$2; shift 2
-  "$@" >"$W/stdout" 2>"$W/stderr"; rc=$?
-  lines=$(wc -l <"$W/stderr")
-  if [ $rc -eq 0 ]; then echo "FAIL (exit 0): $*"; fail=1; fi
-  if [ "$lines" -ne 1 ]; then echo "FAIL ($lines lines on stderr): $*"; cat "$W/stderr"; fail=1; fi
-  if ! grep -q -- "$text" "$W/stderr"; then echo "FAIL (no '$text' in message): $*"; cat "$W/stderr"; fail=1; fi
-  if [ -n "$out" ] && ls "$out"* >/dev/null 2>&1; then echo "FAIL (output left behind): $*"; fail=1; fi
-}
 N="$W/demo/nominal.igs"
 printf 'x,y,z\n1,2,3\n4,nan,6\n' >"$W/nan.csv"
 printf 'x,y,z\n' >"$W/empty.csv"

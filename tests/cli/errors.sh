@@ -5,15 +5,7 @@ set -u
 P=$1; CAD=$2; W=$3
 rm -rf "$W"; mkdir -p "$W"
 fail=0
-expect_error() {  # expect_error TEXT_IN_MESSAGE OUTPUT_FILE command...
-  text=$1; out=$2; shift 2
-  "$@" >"$W/stdout" 2>"$W/stderr"; rc=$?
-  lines=$(wc -l <"$W/stderr")
-  if [ $rc -eq 0 ]; then echo "FAIL (exit 0): $*"; fail=1; fi
-  if [ "$lines" -ne 1 ]; then echo "FAIL ($lines lines on stderr): $*"; cat "$W/stderr"; fail=1; fi
-  if ! grep -q -- "$text" "$W/stderr"; then echo "FAIL (no '$text' in message): $*"; cat "$W/stderr"; fail=1; fi
-  if [ -n "$out" ] && ls "$out"* >/dev/null 2>&1; then echo "FAIL (output left behind): $*"; fail=1; fi
-}
+. "$(dirname "$0")/lib.sh"
 printf 'x,y,z\n1,2,3\n' >"$W/good.csv"
 printf 'x,y,z\n1,2,3\n4,five,6\n' >"$W/bad_number.csv"
 printf 'x,y\n1,2\n' >"$W/no_z.csv"
