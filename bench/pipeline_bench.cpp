@@ -31,7 +31,7 @@ struct Input {
 const Input& freeform_10k() {
   static const Input in = [] {
     const simulation::FreeformCase c = simulation::paper_freeform_case();
-    const auto plan = simulation::random_plan(c.nominal, 10'000, 11);
+    const auto plan = simulation::random_plan(c.nominal.faces.at(0), 10'000, 11);
     const cad::Model actual = simulation::actual_model(c.nominal, c.deformation, c.placement);
     const cad::ModelLocator locator(actual);
     const auto touches = simulation::simulate_touches(locator, plan, {.probe_radius = 1.0, .noise_sigma = 0.0045, .seed = 1});

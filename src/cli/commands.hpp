@@ -1,8 +1,14 @@
 #pragma once
-// The end-to-end commands (DESIGN.md §5): compensate, fit and demo. Each returns the exit status and throws
+// The commands beyond info/project/plan (DESIGN.md §5): compensate, fit, demo, simulate and study. Each returns the exit status and throws
 // std::exception with a one-line message for bad input; output files are written whole or not at all.
 
+#include <cstdint>
 #include <string>
+#include <vector>
+
+#include "simulation/measure.hpp"
+#include "studies/freeform_study.hpp"
+#include "studies/registration_study.hpp"
 
 namespace probecomp::cli {
 
@@ -25,5 +31,36 @@ struct DemoArgs {
   bool quiet = false;
 };
 int run_demo(const DemoArgs& args);
+
+// The demo's printed comparison with the paper's Table 2 (also `probecomp study freeform`).
+std::string freeform_report(const studies::FreeformStudyResult& r);
+
+struct SimulateArgs {
+  std::string cad, faces, plan, output_dir;
+  double spacing = 0.0, probe_radius = 0.0, noise = 0.0;
+  std::string misalign;             // tx,ty,tz,rx,ry,rz (mm, degrees)
+  std::vector<std::string> deform;  // bump:... and sine:... specs (see simulate --help)
+  std::uint64_t seed = 1;
+};
+int run_simulate(const SimulateArgs& args);
+// The help text of --deform: the specification syntax.
+extern const char* const kDeformHelp;
+
+// raw.csv as the simulator and the demo write it: x,y,z,i,j,k per touched point (the measured centre and the
+// programmed outward normal), plus `point` (1-based programmed point) when `numbered`.
+std::string raw_points_csv(const std::vector<simulation::Touch>& touches,
+                           const std::vector<simulation::ProgrammedPoint>& plan, bool numbered);
+
+struct StudyArgs {
+  std::string name, output_dir;
+  studies::RegistrationStudyOptions registration;
+  std::string metric = "point-to-plane", loss = "cauchy";
+  double noise = -1.0;  // mm; < 0: the study's own
+  std::uint64_t seed = 1;
+};
+// The studies `probecomp study` knows, in the order of the paper's sections.
+extern const std::vector<std::string> kStudyNames;
+int run_study(const StudyArgs& args);
+
 
 }  // namespace probecomp::cli

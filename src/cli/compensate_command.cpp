@@ -237,15 +237,11 @@ int run_fit(const FitArgs& a) {
   return 0;
 }
 
-int run_demo(const DemoArgs& a) {
-  const auto t0 = Clock::now();
-  const studies::FreeformStudyResult r = studies::run_freeform_study();
-  const double seconds = since(t0);
+std::string freeform_report(const studies::FreeformStudyResult& r) {
   const studies::PaperTable2 paper = studies::paper_table2();
   const simulation::FreeformCase& c = r.freeform;
-
   std::ostringstream t;
-  t << "probecomp demo: the paper's free-form case (§7.3, Table 2), built in.\n"
+  t << "The paper's free-form case (§7.3, Table 2), built in.\n"
     << "A rational bicubic panel 100 x 50 mm, deformed by a broad bulge (+0.25 mm) and a dent (-1 mm, about 6 mm\n"
     << "across, flanks up to 14 deg), misaligned 0.2 mm in z and 1.5 deg about y; " << r.plan.size()
     << " points on a 120 x 60 grid,\nprobe radius " << c.probe_radius << " mm, noise sigma " << 1000 * c.noise_sigma
@@ -267,21 +263,24 @@ int run_demo(const DemoArgs& a) {
     << "Timings: simulation " << fmt("%.2f", r.simulate_seconds) << " s, CAD-based compensation "
     << fmt("%.2f", r.cad_seconds) << " s, conventional " << fmt("%.2f", r.conventional_seconds) << " s.\n";
 
+  return t.str();
+}
+
+int run_demo(const DemoArgs& a) {
+  const auto t0 = Clock::now();
+  const studies::FreeformStudyResult r = studies::run_freeform_study();
+  const double seconds = since(t0);
+  const simulation::FreeformCase& c = r.freeform;
+  std::ostringstream t;
+  t << "probecomp demo: " << freeform_report(r);
+
   // The inputs and both outputs, so that `probecomp compensate` can be run on them by hand.
   std::filesystem::create_directories(a.output_dir);
   const std::filesystem::path dir(a.output_dir);
   cad::write_surfaces(dir / "nominal.igs", {c.nominal.faces.front().surface});
   io::PointTable table;  // raw.csv's layout: no carried columns, so csv_output reads no row fields
   table.columns = {"x", "y", "z", "i", "j", "k"};
-  std::ostringstream raw;
-  raw << "x,y,z,i,j,k\n";
-  for (std::size_t k = 0; k < r.touches.size(); ++k) {
-    const Point3& x = r.touches[k].measured;
-    const Vector3& n = r.plan[k].normal;
-    raw << mm(x.x()) << ',' << mm(x.y()) << ',' << mm(x.z()) << ',' << unit(n.x()) << ',' << unit(n.y()) << ','
-        << unit(n.z()) << '\n';
-  }
-  io::write_file_atomically(dir / "raw.csv", raw.str());
+  io::write_file_atomically(dir / "raw.csv", raw_points_csv(r.touches, r.plan, false));
   io::write_file_atomically(dir / "compensated_cad.csv", csv_output(table, r.cad));
   io::write_file_atomically(dir / "compensated_conventional.csv", csv_output(table, r.conventional));
   t << "\nWrote " << (dir / "nominal.igs").string() << ", raw.csv, compensated_cad.csv and compensated_conventional.csv\n"

@@ -16,10 +16,10 @@
 #include "cad/locator.hpp"
 #include "cad/model.hpp"
 #include "cad/plan.hpp"
+#include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "cli/format.hpp"
 #include "io/point_table.hpp"
-#include "studies/registration_study.hpp"
 #include "version.hpp"
 
 namespace {
@@ -38,30 +38,6 @@ void emit(const std::string& output, const std::string& text) {
   } else {
     io::write_file_atomically(output, text);
   }
-}
-
-std::vector<int> parse_face_list(const std::string& list) {
-  std::vector<int> faces;
-  std::stringstream in(list);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    try {
-      const auto dash = item.find('-', 1);
-      std::size_t used = 0;
-      if (dash == std::string::npos) {
-        faces.push_back(std::stoi(item, &used));
-        if (used != item.size()) throw std::invalid_argument(item);
-      } else {
-        const int a = std::stoi(item.substr(0, dash));
-        const int b = std::stoi(item.substr(dash + 1), &used);
-        if (used != item.size() - dash - 1 || b < a) throw std::invalid_argument(item);
-        for (int f = a; f <= b; ++f) faces.push_back(f);
-      }
-    } catch (const std::logic_error&) {
-      throw std::invalid_argument("--faces: '" + item + "' is not a face index or range like 3-7");
-    }
-  }
-  return faces;
 }
 
 int run_info(const std::string& part, bool json) {
@@ -143,7 +119,7 @@ int run_project(const std::string& part, const std::string& points_file, const s
 
 int run_plan(const std::string& part, double spacing, const std::string& face_list, const std::string& output) {
   const bool dmis = output.size() > 4 && (output.ends_with(".dmi") || output.ends_with(".DMI"));
-  const std::vector<int> faces = parse_face_list(face_list);
+  const std::vector<int> faces = cli::parse_face_list(face_list);
   const cad::Model model = cad::read_model(part);
   const std::vector<cad::PlannedPoint> plan = cad::plan_points(model, spacing, faces);
   if (plan.empty()) throw std::invalid_argument("no points fit on the chosen faces at spacing " + mm(spacing) + " mm");
@@ -168,101 +144,6 @@ int run_plan(const std::string& part, double spacing, const std::string& face_li
     }
   }
   emit(output, out.str());
-  return 0;
-}
-
-registration::RegistrationOptions registration_options(const std::string& metric, const std::string& loss) {
-  registration::RegistrationOptions o;
-  o.metric = metric == "point-to-point" ? registration::Metric::PointToPoint : registration::Metric::PointToPlane;
-  o.robust.loss = loss == "none"      ? registration::RobustLoss::None
-                  : loss == "huber"   ? registration::RobustLoss::Huber
-                  : loss == "trimmed" ? registration::RobustLoss::Trimmed
-                                      : registration::RobustLoss::Cauchy;
-  return o;
-}
-
-std::string json_pose_error(const studies::PoseError& e) {
-  std::string out = "{";
-  for (std::size_t c = 0; c < 6; ++c) {
-    out += std::string(c ? ", " : "") + "\"" + studies::kPoseComponents[c] + "\": " + fmt("%.6e", e[c]);
-  }
-  return out + "}";
-}
-
-std::string json_statistics(const studies::ErrorStatistics& s) {
-  return "{\"std\": " + json_pose_error(s.std) + ", \"mean\": " + json_pose_error(s.mean) +
-         ", \"ci95\": " + json_pose_error(s.ci95) + "}";
-}
-
-int run_study_registration(const std::string& output_dir, const studies::RegistrationStudyOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  const studies::RegistrationStudyResult r = studies::run_registration_study(options);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const studies::PaperTable1 paper = studies::paper_table1();
-
-  std::ostringstream t;
-  t << "Registration accuracy (paper §5.1, Table 1): cube corner of three 20 mm squares, " << r.points
-    << " points offset " << options.probe_radius << " mm along the normal, noise sigma " << options.noise << " mm,\n"
-    << options.trials << " random misalignments (+-" << options.max_translation << " mm, +-" << options.max_rotation
-    << " deg per axis); " << registration::to_string(options.registration.metric) << " ICP, "
-    << registration::to_string(options.registration.robust.loss) << " weights. Converged: proposed "
-    << r.proposed.converged << "/" << options.trials << ", conventional " << r.conventional.converged << "/"
-    << options.trials << ".\n"
-    << "Error = estimated minus true pose; rotations in degrees, translations in mm.\n\n";
-  char line[256];
-  std::snprintf(line, sizeof line, "%-24s %12s %12s %12s %12s %12s %12s\n", "", "rx (deg)", "ry (deg)", "rz (deg)",
-                "tx (mm)", "ty (mm)", "tz (mm)");
-  t << line;
-  auto row = [&](const char* label, const studies::PoseError& e, bool ours) {
-    std::snprintf(line, sizeof line, "%-24s", label);
-    t << line;
-    for (double v : e) {
-      std::snprintf(line, sizeof line, ours ? " %12.3e" : " %12.4f", v + 0.0);
-      t << line;
-    }
-    t << "\n";
-  };
-  const std::pair<const char*, studies::PoseError studies::ErrorStatistics::*> blocks[] = {
-      {"Standard deviation of the registration error", &studies::ErrorStatistics::std},
-      {"Mean registration error", &studies::ErrorStatistics::mean},
-      {"95 % confidence half-width of the mean (t.s/sqrt(n); the paper's row is about 0.62 x its std)",
-       &studies::ErrorStatistics::ci95}};
-  for (const auto& [title, member] : blocks) {
-    t << title << "\n";
-    row("  proposed (probecomp)", r.proposed.stats.*member, true);
-    row("  proposed (paper)", paper.proposed.*member, false);
-    row("  conventional (probecomp)", r.conventional.stats.*member, true);
-    row("  conventional (paper)", paper.conventional.*member, false);
-  }
-  t << "\n" << fmt("%.2f", seconds) << " s\n";
-  std::cout << t.str();
-
-  if (!output_dir.empty()) {
-    std::filesystem::create_directories(output_dir);
-    std::ostringstream j;
-    j << "{\"study\": \"registration\", \"units\": {\"rotation\": \"deg\", \"translation\": \"mm\"},\n"
-      << " \"trials\": " << options.trials << ", \"points\": " << r.points << ", \"noise_mm\": " << options.noise
-      << ", \"probe_radius_mm\": " << options.probe_radius << ", \"metric\": \""
-      << registration::to_string(options.registration.metric) << "\", \"loss\": \""
-      << registration::to_string(options.registration.robust.loss) << "\",\n"
-      << " \"proposed\": " << json_statistics(r.proposed.stats) << ",\n"
-      << " \"conventional\": " << json_statistics(r.conventional.stats) << ",\n"
-      << " \"converged\": {\"proposed\": " << r.proposed.converged << ", \"conventional\": " << r.conventional.converged
-      << "},\n"
-      << " \"paper\": {\"proposed\": " << json_statistics(paper.proposed) << ",\n"
-      << "           \"conventional\": " << json_statistics(paper.conventional) << "}}\n";
-    std::ostringstream c;
-    c << "trial,route,rx_deg,ry_deg,rz_deg,tx_mm,ty_mm,tz_mm\n";
-    for (const auto& [name, route] : {std::pair{"proposed", &r.proposed}, std::pair{"conventional", &r.conventional}}) {
-      for (std::size_t k = 0; k < route->errors.size(); ++k) {
-        c << k + 1 << ',' << name;
-        for (double v : route->errors[k]) c << ',' << fmt("%.6e", v);
-        c << '\n';
-      }
-    }
-    io::write_file_atomically(std::filesystem::path(output_dir) / "registration.json", j.str());
-    io::write_file_atomically(std::filesystem::path(output_dir) / "registration.csv", c.str());
-  }
   return 0;
 }
 
@@ -296,23 +177,50 @@ int main(int argc, char** argv) {
   plan->add_option("--faces", faces, "Faces to plan on, e.g. 0,3,5-9 (default: all)");
   plan->add_option("--output", output, "PLAN.csv (x,y,z,i,j,k,face) or PLAN.dmi (DMIS PTMEAS program); default: CSV on standard output");
 
-  std::string study_name, output_dir, metric = "point-to-plane", loss = "cauchy";
-  studies::RegistrationStudyOptions study_options;
+  cli::StudyArgs study_args;
   CLI::App* study = app.add_subcommand(
       "study", "Reproduce a study of the paper (DESIGN.md section 3); prints a table and writes DIR/NAME.json and DIR/NAME.csv.");
-  study->add_option("name", study_name,
-                    "registration: the registration Monte Carlo of Table 1 (cube corner, 900 points, 30 misalignments)")
+  study->add_option("name", study_args.name,
+                    "analytic-cylinder: conventional error on a misaligned circle, exact (Figs 3 and 5)\n"
+                    "registration: the registration Monte Carlo of Table 1 (cube corner, 900 points, 30 misalignments)\n"
+                    "cylinder-misalignment: cylinder moved 2 mm, sigma 0-40 um, both methods (Fig. 8)\n"
+                    "cylinder-deformation: cylinder with a local sine of peak 0.5/1/1.5 mm, sigma 0-40 um (Fig. 9)\n"
+                    "freeform: the demo's free-form case (Table 2)")
       ->required()
-      ->check(CLI::IsMember({"registration"}));
-  study->add_option("--output-dir", output_dir, "Directory for NAME.json (summary) and NAME.csv (per trial)");
-  study->add_option("--noise", study_options.noise, "Gaussian noise sigma on each coordinate of the raw centres, mm (default 0)")
+      ->check(CLI::IsMember(cli::kStudyNames));
+  study->add_option("--output-dir", study_args.output_dir, "Directory for NAME.json (summary) and NAME.csv (series)");
+  study->add_option("--noise", study_args.noise,
+                    "registration, freeform: Gaussian noise sigma on each coordinate of the raw centres, mm "
+                    "(default: 0 and 0.0045)")
       ->check(CLI::NonNegativeNumber);
-  study->add_option("--trials", study_options.trials, "Random misalignments (default 30)")->check(CLI::PositiveNumber);
-  study->add_option("--seed", study_options.seed, "Random seed (default 1)");
-  study->add_option("--metric", metric, "ICP error metric: point-to-plane (default) or point-to-point (the paper's)")
+  study->add_option("--seed", study_args.seed, "Random seed (default 1)");
+  study->add_option("--trials", study_args.registration.trials, "registration: random misalignments (default 30)")
+      ->check(CLI::PositiveNumber);
+  study->add_option("--metric", study_args.metric,
+                    "registration: ICP error metric, point-to-plane (default) or point-to-point (the paper's)")
       ->check(CLI::IsMember({"point-to-plane", "point-to-point"}));
-  study->add_option("--loss", loss, "Robust weights: cauchy (default), huber, trimmed or none")
+  study->add_option("--loss", study_args.loss, "registration: robust weights, cauchy (default), huber, trimmed or none")
       ->check(CLI::IsMember({"cauchy", "huber", "trimmed", "none"}));
+
+  cli::SimulateArgs sim;
+  CLI::App* simulate = app.add_subcommand(
+      "simulate",
+      "Simulate a CMM measurement of a part (paper §7): the probe travels along each programmed normal until its tip "
+      "touches the actual (misaligned, deformed) part. Writes DIR/raw.csv (x,y,z,i,j,k,point), DIR/truth.csv "
+      "(contact point, actual normal, exact centre) and DIR/actual.igs.");
+  simulate->add_option("--cad", sim.cad, "Nominal CAD file (.igs, .iges, .stp, .step)")->required();
+  auto* plan_file = simulate->add_option("--plan", sim.plan, "PLAN.csv (x,y,z,i,j,k[,face]: programmed points and outward normals) or PLAN.dmo");
+  auto* spacing_option = simulate->add_option("--spacing", sim.spacing, "Plan points this far apart on the faces, mm");
+  plan_file->excludes(spacing_option);
+  simulate->add_option("--faces", sim.faces, "With --spacing: faces to plan on, e.g. 0,3,5-9 (default: all)")
+      ->needs(spacing_option);
+  simulate->add_option("--probe-radius", sim.probe_radius, "Tip radius, mm")->required();
+  simulate->add_option("--misalign", sim.misalign,
+                       "Where the actual part sits: tx,ty,tz,rx,ry,rz (mm, degrees; T = Translation*Rz*Ry*Rx), default none");
+  simulate->add_option("--deform", sim.deform, cli::kDeformHelp);
+  simulate->add_option("--noise", sim.noise, "Gaussian noise sigma on each coordinate of the centre, mm (default 0)");
+  simulate->add_option("--seed", sim.seed, "Random seed of the noise (default 1)");
+  simulate->add_option("--output-dir", sim.output_dir, "Directory for raw.csv, truth.csv and actual.igs")->required();
 
   cli::CompensateArgs comp;
   CLI::App* compensate = app.add_subcommand(
@@ -364,9 +272,10 @@ int main(int argc, char** argv) {
     if (info->parsed()) return run_info(part, json);
     if (project->parsed()) return run_project(part, points, output);
     if (plan->parsed()) return run_plan(part, spacing, faces, output);
-    if (study->parsed()) {
-      study_options.registration = registration_options(metric, loss);
-      return run_study_registration(output_dir, study_options);
+    if (study->parsed()) return cli::run_study(study_args);
+    if (simulate->parsed()) {
+      if (sim.plan.empty() && !(sim.spacing > 0.0)) throw std::invalid_argument("simulate needs --plan PLAN.csv or --spacing S");
+      return cli::run_simulate(sim);
     }
   } catch (const std::exception& e) {
     std::cerr << "probecomp: " << e.what() << '\n';

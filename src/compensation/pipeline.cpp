@@ -8,6 +8,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "nurbs/degree_elevation.hpp"
 #include "cad/locator.hpp"
 #include "cad/offset_model.hpp"
 #include "compensation/contact.hpp"
@@ -17,6 +18,16 @@
 namespace probecomp::compensation {
 
 namespace {
+
+// The fit starts from the registered offset face. A degree-1 direction (a plane, a cylinder's rulings) could
+// follow a deformation only by creases at the knots refinement inserts, so it is raised to degree 3 first
+// (same shape and parameters, so the registration's (u, v) still hold).
+nurbs::Surface fit_start(const nurbs::Surface& offset_face, const registration::RigidTransform& T) {
+  nurbs::Surface s = nurbs::transformed(offset_face, T);
+  if (s.p() < 2) s = nurbs::elevate_degree_u(s, 3 - s.p());
+  if (s.q() < 2) s = nurbs::elevate_degree_v(s, 3 - s.q());
+  return s;
+}
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
@@ -200,8 +211,8 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   for (const auto& [f, members] : by_face) {
     const cad::Face& face = work.faces[static_cast<std::size_t>(f)];
     FaceReport& rep = reports[f];
-    const nurbs::Surface& offset_face = offset.model.faces[static_cast<std::size_t>(f)].surface;
-    const double needed = options.min_points_per_control_point * offset_face.num_u() * offset_face.num_v();
+    const nurbs::Surface start = fit_start(offset.model.faces[static_cast<std::size_t>(f)].surface, T);
+    const double needed = options.min_points_per_control_point * start.num_u() * start.num_v();
     std::vector<Point3> pts;
     std::vector<fitting::SurfaceParameter> params;
     pts.reserve(members.size());
@@ -213,7 +224,6 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
     std::optional<fitting::AdaptiveFitResult> fit;
     std::vector<double> weights(members.size(), 1.0);
     if (static_cast<double>(members.size()) >= needed) {
-      const nurbs::Surface start = nurbs::transformed(offset_face, T);
       // Outliers are found from the fit's own residuals (the deformation is data, not outliers, so the
       // registration's residuals cannot tell them), left out, and the face refitted, until no new point is
       // beyond the bound. A point once left out stays out: a fit bent by gross outliers can push good

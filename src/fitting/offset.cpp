@@ -57,9 +57,10 @@ struct TrueOffset {
 // S + d·n and S's principal curvatures from its fundamental forms (with II from n = S_u × S_v / |…|, a
 // principal curvature k > 0 means S bends towards n; the offset's metric scales by 1 − d·k, which vanishes
 // where the offset folds).
-TrueOffset true_offset(const Surface& s, double d, double u, double v) {
+TrueOffset true_offset(const Surface& s, const OffsetDistance& distance, double u, double v) {
   TrueOffset out;
   const nurbs::SurfaceD2 sd = nurbs::derivatives_d2(s, u, v);
+  const double d = distance(sd.S);
   // The normal from these derivatives where they are clearly independent; near a pole or a collapsed edge
   // (a tangent tiny against the other, as unit_normal judges it, or |S_u × S_v| tiny against |S_u||S_v|),
   // unit_normal's limit from the neighbourhood.
@@ -169,9 +170,10 @@ std::optional<Surface> fit_tensor_grid(const Surface& base, const std::vector<do
   return Surface(base.U(), base.V(), P, weights);
 }
 
-}  // namespace
-
-OffsetResult offset_surface(const Surface& s, double d, const OffsetOptions& options) {
+// The offset by `distance` (a function of the point of S), fitted and refined as the header says. The fit folds
+// over where S bends towards the offset more tightly than `fold_distance` (0: not checked).
+OffsetResult fit_offset(const Surface& s, const OffsetDistance& distance, double fold_distance,
+                        const OffsetOptions& options) {
   OffsetResult result{.status = OffsetResult::Status::Degenerate, .surface = s};
   result.min_radius_towards_offset = std::numeric_limits<double>::infinity();
   // S with the knots inserted so far (the same shape): the fit's knots and weights. The first fit keeps S's
@@ -193,7 +195,7 @@ OffsetResult offset_surface(const Surface& s, double d, const OffsetOptions& opt
     tbb::parallel_for(std::size_t{0}, tu.size(), [&](std::size_t a) {
       for (std::size_t b = 0; b < tv.size(); ++b) {
         const std::size_t k = a * tv.size() + b;
-        const TrueOffset o = true_offset(s, d, tu[a], tv[b]);
+        const TrueOffset o = true_offset(s, distance, tu[a], tv[b]);
         points[k] = o.point;
         bad[k] = o.degenerate;
       }
@@ -219,7 +221,7 @@ OffsetResult offset_surface(const Surface& s, double d, const OffsetOptions& opt
     tbb::parallel_for(std::size_t{0}, cu.size(), [&](std::size_t a) {
       for (std::size_t b = 0; b < cv.size(); ++b) {
         const std::size_t k = a * cv.size() + b;
-        const TrueOffset o = true_offset(s, d, cu[a].first, cv[b].first);
+        const TrueOffset o = true_offset(s, distance, cu[a].first, cv[b].first);
         deviation[k] = o.degenerate ? std::numeric_limits<double>::infinity()
                                     : geometric_gap(nurbs::evaluate(fit, cu[a].first, cv[b].first) - o.point, o);
         towards[k] = o.towards;
@@ -244,7 +246,7 @@ OffsetResult offset_surface(const Surface& s, double d, const OffsetOptions& opt
       }
     }
     result.min_radius_towards_offset = max_towards > 0.0 ? 1.0 / max_towards : std::numeric_limits<double>::infinity();
-    if (result.min_radius_towards_offset <= std::abs(d)) {
+    if (result.min_radius_towards_offset <= fold_distance) {
       result.status = OffsetResult::Status::FoldsOver;
       return result;
     }
@@ -270,6 +272,17 @@ OffsetResult offset_surface(const Surface& s, double d, const OffsetOptions& opt
   }
   result.status = OffsetResult::Status::ToleranceNotReached;
   return result;
+}
+
+
+}  // namespace
+
+OffsetResult offset_surface(const Surface& s, double d, const OffsetOptions& options) {
+  return fit_offset(s, [d](const Point3&) { return d; }, std::abs(d), options);
+}
+
+OffsetResult displaced_surface(const Surface& s, const OffsetDistance& d, const OffsetOptions& options) {
+  return fit_offset(s, d, 0.0, options);
 }
 
 }  // namespace probecomp::fitting

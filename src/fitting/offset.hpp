@@ -5,6 +5,8 @@
 // the fit is checked against the true offset on a denser grid, and knots are inserted (into S's knot vectors,
 // shape unchanged) in the spans that miss the tolerance, until it holds or the rounds run out.
 
+#include <functional>
+
 #include "nurbs/surface.hpp"
 
 namespace probecomp::fitting {
@@ -40,6 +42,13 @@ struct OffsetResult {
 
 // Offset along the unit normal n = S_u × S_v / |S_u × S_v| (d < 0: the other side).
 [[nodiscard]] OffsetResult offset_surface(const nurbs::Surface& s, double d, const OffsetOptions& options = {});
+
+// S + d(S)·n: a distance that varies with the point of S (a shape deviation along the normal, as the simulator
+// makes). The same fit and refinement; not checked for folding over (the caller's d may legitimately exceed a
+// radius of S somewhere it is small), and the tolerance measures the gap along n, exact only where ∇d is small.
+using OffsetDistance = std::function<double(const Point3&)>;
+[[nodiscard]] OffsetResult displaced_surface(const nurbs::Surface& s, const OffsetDistance& d,
+                                             const OffsetOptions& options = {});
 
 [[nodiscard]] const char* to_string(OffsetResult::Status s);
 

@@ -448,7 +448,16 @@ struct CellSearch {
       // The minimum lies beyond the edge: follow it (f only decreases on the way).
       ClosestPointResult polished = refine_closest_point(surface, query, r.u, r.v, max_iterations);
       iterations += polished.iterations;
-      if (region == nullptr || region->contains(polished.u, polished.v)) r = polished;
+      const bool polished_ok = polished.status == ClosestPointStatus::Converged ||
+                               polished.status == ClosestPointStatus::OnBoundary;
+      if (polished_ok && (region == nullptr || region->contains(polished.u, polished.v))) {
+        r = polished;
+      } else if (!polished_ok) {
+        // Newton cannot settle across the edge: the surface is only C0 there (a crease along a knot line, e.g.
+        // a knot of full multiplicity) and the box's minimum on it is the minimum of both sides. The
+        // neighbouring cell is searched in its own right, so a closer point beyond would still be found.
+        r.status = ClosestPointStatus::Converged;
+      }
     }
     if (closer(r, best)) best = r;
     return on_inner_edge;

@@ -4,8 +4,11 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <stdexcept>
 
+#include "fitting/offset.hpp"
 #include "fitting/spans.hpp"
+#include "nurbs/degree_elevation.hpp"
 
 namespace probecomp::simulation {
 
@@ -14,6 +17,9 @@ namespace {
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // Displacements below this (mm) are not worth knots: a thousandth of a nanometre.
 constexpr double kNegligible = 1e-9;
+// How closely the actual surface follows nominal + displacement (mm): far below any CMM's noise. The actual
+// NURBS is the truth the simulated probe touches, so this only bounds how far it is from the intended shape.
+constexpr double kDeformedSurfaceTolerance = 1e-5;
 
 // Distance from a Gaussian's centre beyond which a·exp(−r²/2w²) is negligible.
 double reach(double amplitude, double width) {
@@ -54,7 +60,8 @@ double Deformation::displacement(const Point3& x) const {
   double d = 0.0;
   for (const Bump& b : bumps) d += b.amplitude * gaussian(x, b.centre, b.width);
   for (const Sinusoid& s : sinusoids) {
-    const double phase = 2.0 * std::numbers::pi * s.direction.normalized().dot(x - s.origin) / s.wavelength;
+    const double phase = 2.0 * std::numbers::pi * s.direction.normalized().dot(x - s.origin) / s.wavelength +
+                         s.phase * std::numbers::pi / 180.0;
     d += s.amplitude * std::sin(phase) * (s.window > 0.0 ? gaussian(x, s.origin, s.window) : 1.0);
   }
   return d;
@@ -77,7 +84,11 @@ nurbs::Surface deformed_surface(const nurbs::Surface& s, int outward, const Defo
   if (d.empty()) return s;
   // Eight samples per span resolve a span's length along a row to well under a per cent.
   constexpr int kPerSpan = 8;
+  // A degree-1 direction (planes, a cylinder's rulings) would stay piecewise linear, with creases at the new
+  // knots: cubic first.
   nurbs::Surface refined = s;
+  if (refined.p() < 2) refined = nurbs::elevate_degree_u(refined, 3 - refined.p());
+  if (refined.q() < 2) refined = nurbs::elevate_degree_v(refined, 3 - refined.q());
   for (int direction = 0; direction < 2; ++direction) {
     const std::vector<double> breaks_u = refined.U().breakpoints();
     const std::vector<double> breaks_v = refined.V().breakpoints();
@@ -95,18 +106,16 @@ nurbs::Surface deformed_surface(const nurbs::Surface& s, int outward, const Defo
         refining_knots(along_u ? breaks_u : breaks_v, kPerSpan, samples, static_cast<int>(tb.size()), d);
     if (!X.empty()) refined = along_u ? nurbs::refine_knots_u(refined, X) : nurbs::refine_knots_v(refined, X);
   }
-  std::vector<HomogeneousPoint> Pw = refined.homogeneous();
-  for (int i = 0; i < refined.num_u(); ++i) {
-    const double u = refined.U().greville(i);
-    for (int j = 0; j < refined.num_v(); ++j) {
-      const double v = refined.V().greville(j);
-      const Point3 x = nurbs::evaluate(refined, u, v);
-      const nurbs::UnitNormal n = nurbs::unit_normal(refined, u, v);
-      HomogeneousPoint& q = Pw[static_cast<std::size_t>(i * refined.num_v() + j)];
-      q.head<3>() += q.w() * d.displacement(x) * static_cast<double>(outward) * n.n;
-    }
+  // The actual surface fits nominal + displacement on the refined knots (least squares, knots inserted where it
+  // misses): a smooth surface, also across the knots where the nominal is only C0 in parameter but smooth in
+  // shape (a rational arc's double knot), which moving each control point by the displacement would crease.
+  const fitting::OffsetResult fit = fitting::displaced_surface(
+      refined, [&](const Point3& x) { return static_cast<double>(outward) * d.displacement(x); },
+      {.tolerance = kDeformedSurfaceTolerance, .samples_per_span = 3, .checks_per_span = 8, .max_rounds = 8});
+  if (fit.status == fitting::OffsetResult::Status::Degenerate) {
+    throw std::invalid_argument("deformed surface: the face has no normal somewhere, so it cannot be displaced along it");
   }
-  return nurbs::Surface(refined.U(), refined.V(), std::move(Pw));
+  return fit.surface;
 }
 
 }  // namespace probecomp::simulation

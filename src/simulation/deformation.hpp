@@ -2,10 +2,10 @@
 // Shape deviations for simulated parts: displacements along the nominal outward normal, functions of the nominal
 // point's position (so they mean the same on every face of a model, whatever its parametrisation):
 //   bump      a·exp(−|x − c|² / (2w²))       (a < 0: a dent; w is the Gaussian's standard deviation, mm)
-//   sinusoid  a·sin(2π (d·(x − o)) / λ)      (d a unit direction; optional Gaussian window of width w about o)
-// A deformed face is a NURBS: the nominal with knots inserted where the deformation needs them, each control
-// point moved by the displacement at its Greville parameters. That NURBS *is* the simulated actual surface;
-// it follows the analytic displacement to O(h²) in the refined span length h.
+//   sinusoid  a·sin(2π (d·(x − o)) / λ + φ)  (d a unit direction; optional Gaussian window of width w about o)
+// A deformed face is a NURBS: the nominal (raised to degree 3 in a degree-1 direction) with knots inserted where
+// the deformation needs them, fitted to nominal + displacement to 1e-5 mm (fitting::displaced_surface). That
+// NURBS *is* the simulated actual surface.
 
 #include <vector>
 
@@ -25,6 +25,7 @@ struct Sinusoid {
   Vector3 direction = Vector3::UnitX();
   Point3 origin = Point3::Zero();
   double window = 0.0;  // > 0: Gaussian window of this standard deviation about `origin` (a local wave), mm
+  double phase = 0.0;   // φ, degrees: 90 puts a crest (of height a) at `origin`
 };
 
 struct Deformation {
@@ -43,7 +44,8 @@ inline constexpr double kSpansPerFeature = 4.0;
 
 // The face `s` (outward normal = outward · S_u × S_v) deformed by `d`. Knots are inserted (shape unchanged)
 // until every span is shorter than feature_length / kSpansPerFeature wherever the deformation is not
-// negligible (below 1e-9 mm), then the control points move. Returns `s` itself when `d` is empty.
+// negligible (below 1e-9 mm), then the surface is fitted. Returns `s` itself when `d` is empty; throws
+// std::invalid_argument for a face without a normal somewhere.
 [[nodiscard]] nurbs::Surface deformed_surface(const nurbs::Surface& s, int outward, const Deformation& d);
 
 }  // namespace probecomp::simulation

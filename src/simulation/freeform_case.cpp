@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <numbers>
-#include <random>
 
 namespace probecomp::simulation {
 
@@ -28,19 +27,6 @@ nurbs::Surface nominal_panel() {
   return nurbs::Surface(std::move(U), std::move(V), P, w);
 }
 
-std::vector<ProgrammedPoint> plan_at(const cad::Model& nominal, const std::vector<std::pair<double, double>>& uv) {
-  const cad::Face& face = nominal.faces.at(0);
-  std::vector<ProgrammedPoint> out;
-  out.reserve(uv.size());
-  for (const auto& [u, v] : uv) {
-    const nurbs::UnitNormal n = nurbs::unit_normal(face.surface, u, v);
-    out.push_back({nurbs::evaluate(face.surface, u, v), static_cast<double>(face.outward) * n.n, face.index});
-  }
-  return out;
-}
-
-double at(const nurbs::Domain& d, bool u, double t) { return u ? d.u0 + t * (d.u1 - d.u0) : d.v0 + t * (d.v1 - d.v0); }
-
 }  // namespace
 
 FreeformCase paper_freeform_case(bool reversed) {
@@ -60,31 +46,6 @@ FreeformCase paper_freeform_case(bool reversed) {
   c.deformation.bumps.push_back({nurbs::evaluate(s, 0.64, 0.62), -1.0, 2.5});
   c.placement = registration::from_pose({.rx = 0.0, .ry = 1.5, .rz = 0.0, .t = Vector3(0.0, 0.0, 0.2)});
   return c;
-}
-
-std::vector<ProgrammedPoint> grid_plan(const cad::Model& nominal, int nu, int nv, double margin) {
-  const nurbs::Domain d = nominal.faces.at(0).surface.domain();
-  std::vector<std::pair<double, double>> uv;
-  for (int i = 0; i < nu; ++i) {
-    for (int j = 0; j < nv; ++j) {
-      const double a = margin + (1.0 - 2.0 * margin) * (nu > 1 ? static_cast<double>(i) / (nu - 1) : 0.5);
-      const double b = margin + (1.0 - 2.0 * margin) * (nv > 1 ? static_cast<double>(j) / (nv - 1) : 0.5);
-      uv.emplace_back(at(d, true, a), at(d, false, b));
-    }
-  }
-  return plan_at(nominal, uv);
-}
-
-std::vector<ProgrammedPoint> random_plan(const cad::Model& nominal, int n, std::uint64_t seed, double margin) {
-  const nurbs::Domain d = nominal.faces.at(0).surface.domain();
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> t(margin, 1.0 - margin);
-  std::vector<std::pair<double, double>> uv;
-  for (int k = 0; k < n; ++k) {
-    const double a = t(rng), b = t(rng);
-    uv.emplace_back(at(d, true, a), at(d, false, b));
-  }
-  return plan_at(nominal, uv);
 }
 
 }  // namespace probecomp::simulation

@@ -27,10 +27,4 @@ struct FreeformCase {
 // (the face's outward is then −1, and nothing in the file says so).
 [[nodiscard]] FreeformCase paper_freeform_case(bool reversed = false);
 
-// Programmed points on face 0 of `nominal`: an nu × nv grid evenly spaced in (u, v), or n points at random
-// (u, v); both inside a margin (fraction of the domain) that keeps the tip off the edges after misalignment.
-[[nodiscard]] std::vector<ProgrammedPoint> grid_plan(const cad::Model& nominal, int nu, int nv, double margin = 0.04);
-[[nodiscard]] std::vector<ProgrammedPoint> random_plan(const cad::Model& nominal, int n, std::uint64_t seed,
-                                                       double margin = 0.04);
-
 }  // namespace probecomp::simulation

@@ -53,7 +53,42 @@ Touch touch(const cad::ModelLocator& actual, const ProgrammedPoint& programmed, 
   return out;
 }
 
+// Programmed points at fractions (a, b) of the face's (u, v) domain.
+std::vector<ProgrammedPoint> plan_at(const cad::Face& face, const std::vector<std::pair<double, double>>& ab) {
+  const nurbs::Domain d = face.surface.domain();
+  std::vector<ProgrammedPoint> out;
+  out.reserve(ab.size());
+  for (const auto& [a, b] : ab) {
+    const double u = d.u0 + a * (d.u1 - d.u0), v = d.v0 + b * (d.v1 - d.v0);
+    const nurbs::UnitNormal n = nurbs::unit_normal(face.surface, u, v);
+    out.push_back({nurbs::evaluate(face.surface, u, v), static_cast<double>(face.outward) * n.n, face.index});
+  }
+  return out;
+}
+
 }  // namespace
+
+std::vector<ProgrammedPoint> grid_plan(const cad::Face& face, int nu, int nv, PlanMargin margin) {
+  std::vector<std::pair<double, double>> ab;
+  for (int i = 0; i < nu; ++i) {
+    for (int j = 0; j < nv; ++j) {
+      ab.emplace_back(margin.u + (1.0 - 2.0 * margin.u) * (nu > 1 ? static_cast<double>(i) / (nu - 1) : 0.5),
+                      margin.v + (1.0 - 2.0 * margin.v) * (nv > 1 ? static_cast<double>(j) / (nv - 1) : 0.5));
+    }
+  }
+  return plan_at(face, ab);
+}
+
+std::vector<ProgrammedPoint> random_plan(const cad::Face& face, int n, std::uint64_t seed, PlanMargin margin) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> a(margin.u, 1.0 - margin.u), b(margin.v, 1.0 - margin.v);
+  std::vector<std::pair<double, double>> ab;
+  for (int k = 0; k < n; ++k) {
+    const double x = a(rng), y = b(rng);  // in this order: the same draws as before margins per direction
+    ab.emplace_back(x, y);
+  }
+  return plan_at(face, ab);
+}
 
 const char* to_string(Touch::Status s) {
   switch (s) {

@@ -38,6 +38,16 @@ struct Touch {
 };
 [[nodiscard]] const char* to_string(Touch::Status s);
 
+// Programmed points on one face, outward normals from its material side: an nu × nv grid evenly spaced in
+// (u, v) (nu along u), or n points at random (u, v). Both keep a margin (a fraction of the domain in u and in
+// v) that keeps the tip off the edges after misalignment and deformation. The face's trim is not consulted.
+struct PlanMargin {
+  double u = 0.04, v = 0.04;
+};
+[[nodiscard]] std::vector<ProgrammedPoint> grid_plan(const cad::Face& face, int nu, int nv, PlanMargin margin = {});
+[[nodiscard]] std::vector<ProgrammedPoint> random_plan(const cad::Face& face, int n, std::uint64_t seed,
+                                                       PlanMargin margin = {});
+
 struct MeasurementOptions {
   double probe_radius = 1.0;  // mm
   double noise_sigma = 0.0;   // standard deviation of Gaussian noise on each coordinate of the centre, mm

@@ -1,0 +1,26 @@
+#pragma once
+// Parsers for the command line's small languages. Each throws std::invalid_argument with a one-line message
+// that names the option and shows the expected form.
+
+#include <string>
+#include <vector>
+
+#include "registration/rigid.hpp"
+#include "simulation/deformation.hpp"
+
+namespace probecomp::cli {
+
+// "0,3,5-9" → {0, 3, 5, 6, 7, 8, 9} (--faces).
+[[nodiscard]] std::vector<int> parse_face_list(const std::string& list);
+
+// "tx,ty,tz,rx,ry,rz" (mm, degrees; T = Translation · Rz · Ry · Rx) → the placement CAD → machine (--misalign).
+[[nodiscard]] registration::RigidTransform parse_misalignment(const std::string& spec);
+
+// Adds one --deform specification to `d`:
+//   bump:X,Y,Z,A,W              Gaussian bump at (X,Y,Z), amplitude A (mm, < 0 a dent), width W (its σ, mm)
+//   sine:A,L,DX,DY,DZ[,OX,OY,OZ[,W[,PHASE]]]
+//                               A·sin(2π d·(x − o)/L + PHASE°) along direction d, origin o (default 0,0,0),
+//                               under a Gaussian window of σ W about o when W > 0
+void add_deformation(const std::string& spec, simulation::Deformation& d);
+
+}  // namespace probecomp::cli

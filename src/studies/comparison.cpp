@@ -1,0 +1,99 @@
+#include "studies/comparison.hpp"
+
+#include <chrono>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+namespace probecomp::studies {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+}  // namespace
+
+ErrorSummary summarise(const std::vector<double>& errors) {
+  ErrorSummary s;
+  double sum = 0.0;
+  s.min = std::numeric_limits<double>::infinity();
+  s.max = -s.min;
+  for (double e : errors) {
+    if (std::isnan(e)) continue;
+    ++s.points;
+    sum += e;
+    s.min = std::min(s.min, e);
+    s.max = std::max(s.max, e);
+  }
+  if (s.points == 0) return {};
+  s.mean = sum / s.points;
+  double ss = 0.0;
+  for (double e : errors) {
+    if (!std::isnan(e)) ss += (e - s.mean) * (e - s.mean);
+  }
+  s.std = s.points > 1 ? std::sqrt(ss / (s.points - 1)) : 0.0;
+  return s;
+}
+
+std::vector<double> errors_against(const cad::ModelLocator& part, const compensation::CompensationResult& r) {
+  std::vector<Point3> pts;
+  std::vector<std::size_t> index;
+  for (std::size_t k = 0; k < r.points.size(); ++k) {
+    if (r.points[k].status == compensation::PointStatus::Ok) {
+      pts.push_back(r.points[k].contact);
+      index.push_back(k);
+    }
+  }
+  std::vector<double> e(r.points.size(), std::numeric_limits<double>::quiet_NaN());
+  const std::vector<cad::ModelPoint> feet = part.closest_points(pts);
+  for (std::size_t i = 0; i < feet.size(); ++i) {
+    if (feet[i].ok()) e[index[i]] = feet[i].distance;
+  }
+  return e;
+}
+
+MethodComparison compare_methods(const SimulatedMeasurement& m, const ComparisonOptions& options) {
+  MethodComparison out;
+  auto t0 = Clock::now();
+  const cad::Model actual = simulation::actual_model(m.nominal, m.deformation, m.placement);
+  const cad::ModelLocator actual_locator(actual);
+  out.touches = simulation::simulate_touches(
+      actual_locator, m.plan, {.probe_radius = m.probe_radius, .noise_sigma = m.noise_sigma, .seed = m.seed});
+  out.simulate_seconds = since(t0);
+  for (std::size_t k = 0; k < out.touches.size(); ++k) {
+    if (out.touches[k].status == simulation::Touch::Status::Missed) {
+      throw std::invalid_argument("simulated measurement: programmed point " + std::to_string(k + 1) +
+                                  " misses the actual part");
+    }
+  }
+
+  std::vector<Point3> raw;
+  std::vector<Vector3> normals;
+  for (std::size_t k = 0; k < out.touches.size(); ++k) {
+    raw.push_back(out.touches[k].measured);
+    normals.push_back(m.plan[k].normal);
+  }
+  compensation::CompensateOptions o = options.compensate;
+  o.method = compensation::Method::Cad;
+  o.probe_radius = m.probe_radius;
+  t0 = Clock::now();
+  out.cad = compensation::compensate(m.nominal, raw,
+                                     options.approach_normals ? std::optional<std::span<const Vector3>>(normals)
+                                                              : std::nullopt,
+                                     o);
+  out.cad_seconds = since(t0);
+  o.method = compensation::Method::Conventional;
+  t0 = Clock::now();
+  out.conventional = compensation::compensate(m.nominal, raw, std::span<const Vector3>(normals), o);
+  out.conventional_seconds = since(t0);
+
+  out.cad_error = errors_against(actual_locator, out.cad);
+  out.conventional_error = errors_against(actual_locator, out.conventional);
+  out.cad_summary = summarise(out.cad_error);
+  out.conventional_summary = summarise(out.conventional_error);
+  return out;
+}
+
+}  // namespace probecomp::studies
