@@ -13,6 +13,7 @@
 #include "cad/offset_model.hpp"
 #include "compensation/contact.hpp"
 #include "compensation/conventional.hpp"
+#include "compensation/outliers.hpp"
 #include "nurbs/closest_point.hpp"
 
 namespace probecomp::compensation {
@@ -223,7 +224,20 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
     }
     std::optional<fitting::AdaptiveFitResult> fit;
     std::vector<double> weights(members.size(), 1.0);
+    std::vector<char> gross(members.size(), 0);
+    double bound = 0.0;
     if (static_cast<double>(members.size()) >= needed) {
+      // Gross outliers first, from their neighbours, so that the fit's refinement never chases them.
+      std::vector<double> residuals(members.size());
+      std::vector<Vector3> normals(members.size());
+      for (std::size_t i = 0; i < members.size(); ++i) {
+        residuals[i] = out.registration.matches[members[i]].distance;
+        normals[i] = T.linear() * nurbs::unit_normal(face.surface, params[i].u, params[i].v).n;
+      }
+      gross = local_outliers(pts, residuals, normals, options.gross_outliers).outlier;
+      for (std::size_t i = 0; i < members.size(); ++i) {
+        if (gross[i]) weights[i] = 0.0;
+      }
       // Outliers are found from the fit's own residuals (the deformation is data, not outliers, so the
       // registration's residuals cannot tell them), left out, and the face refitted, until no new point is
       // beyond the bound. A point once left out stays out: a fit bent by gross outliers can push good
@@ -235,7 +249,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
             fit->status == fitting::AdaptiveFitResult::Status::NumericalError) {
           break;
         }
-        const double bound = std::max(options.outlier_sigmas * fit->noise_sigma, options.min_outlier_residual);
+        bound = std::max(options.outlier_sigmas * fit->noise_sigma, options.min_outlier_residual);
         int flagged = 0;
         for (std::size_t i = 0; i < members.size(); ++i) {
           if (weights[i] > 0.0 && std::abs(fit->residuals[i]) > bound) {
@@ -245,6 +259,19 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
         }
         if (flagged == 0) break;
       }
+      // A point its neighbours did not predict (a narrow dent's bottom seen through a coarse neighbourhood) is
+      // trusted after all when the fit made without it passes within the bound, a check by exclusion; the face
+      // is then refitted with it, since such points carry the shape the neighbourhood missed.
+      const bool usable = fit && fit->status != fitting::AdaptiveFitResult::Status::NotDone &&
+                          fit->status != fitting::AdaptiveFitResult::Status::NumericalError;
+      int reinstated = 0;
+      for (std::size_t i = 0; usable && i < members.size(); ++i) {
+        if (gross[i] && std::abs(fit->residuals[i]) <= bound) {
+          weights[i] = 1.0;
+          ++reinstated;
+        }
+      }
+      if (reinstated > 0) fit = fitting::fit_surface(start, pts, params, weights, options.fit);
     }
     rep.fitted = fit && (fit->status == fitting::AdaptiveFitResult::Status::OK ||
                          fit->status == fitting::AdaptiveFitResult::Status::NoiseNotReached);
@@ -264,8 +291,9 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
           c.status = PointStatus::Failed;
           continue;
         }
-        c.status = weights[i] > 0.0 ? PointStatus::Ok : PointStatus::Outlier;
-        rep.outliers += weights[i] > 0.0 ? 0 : 1;
+        const bool trusted = weights[i] > 0.0;
+        c.status = trusted ? PointStatus::Ok : PointStatus::Outlier;
+        rep.outliers += trusted ? 0 : 1;
         c.contact = contacts[i].contact;
         c.normal = contacts[i].normal;
       }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "cad/model.hpp"
+#include "compensation/outliers.hpp"
 #include "fitting/adaptive.hpp"
 #include "fitting/offset.hpp"
 #include "registration/routes.hpp"
@@ -90,6 +91,8 @@ struct CompensateOptions {
   // A face is fitted when it holds at least this many points per control point of its offset surface; fewer
   // cannot average the noise out (its points fall back to the nominal normal).
   double min_points_per_control_point = 2.0;
+  // Gross outliers found before the fit, each against a quadratic through its neighbours (compensation/outliers.hpp).
+  LocalOutlierOptions gross_outliers;
   // Residuals beyond this many noise sigmas (of the face's fit) mark outliers: left out of the refit. Five
   // sigmas: a Gaussian exceeds it once in 1.7 million points.
   double outlier_sigmas = 5.0;
