@@ -35,6 +35,8 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 
 // Fits made at most per face while peeling outliers off (each refit follows a change in the points left out).
 constexpr int kMaxOutlierFits = 4;
+// A left-out point is refitted when the fit made without it misses it by at most this many outlier bounds.
+constexpr double kSecondChance = 2.0;
 
 std::string mm(double v) {
   char buf[32];
@@ -244,7 +246,10 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
       // neighbours beyond the bound too, and those are then reported as outliers (not trusted) rather than
       // left to oscillate in and out.
       for (int attempt = 0; attempt < kMaxOutlierFits; ++attempt) {
-        fit = fitting::fit_surface(start, pts, params, weights, options.fit);
+        // A refit starts from the last fit, whose knots already follow the shape: it seldom needs a round of
+        // refinement, where starting over would repeat them all.
+        fit = attempt == 0 ? fitting::fit_surface(start, pts, params, weights, options.fit)
+                           : fitting::fit_surface(fit->surface, pts, fit->params, weights, options.fit);
         if (fit->status == fitting::AdaptiveFitResult::Status::NotDone ||
             fit->status == fitting::AdaptiveFitResult::Status::NumericalError) {
           break;
@@ -259,19 +264,29 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
         }
         if (flagged == 0) break;
       }
-      // A point its neighbours did not predict (a narrow dent's bottom seen through a coarse neighbourhood) is
-      // trusted after all when the fit made without it passes within the bound, a check by exclusion; the face
-      // is then refitted with it, since such points carry the shape the neighbourhood missed.
+      // A point left out (one its neighbours did not predict, as a narrow dent's bottom seen through a coarse
+      // neighbourhood, or one an earlier, less refined fit missed) is given another chance when the last fit, made
+      // without it, passes within twice the bound (left out, a point that alone carries a feature is missed by
+      // more than it would be with it; gross errors are missed by far more). The face is refitted with those
+      // points, and any that the new fit still misses by more than the bound is left out again.
       const bool usable = fit && fit->status != fitting::AdaptiveFitResult::Status::NotDone &&
                           fit->status != fitting::AdaptiveFitResult::Status::NumericalError;
-      int reinstated = 0;
+      std::vector<std::size_t> second_chance;
       for (std::size_t i = 0; usable && i < members.size(); ++i) {
-        if (gross[i] && std::abs(fit->residuals[i]) <= bound) {
+        if (weights[i] == 0.0 && std::abs(fit->residuals[i]) <= kSecondChance * bound) {
           weights[i] = 1.0;
-          ++reinstated;
+          second_chance.push_back(i);
         }
       }
-      if (reinstated > 0) fit = fitting::fit_surface(start, pts, params, weights, options.fit);
+      if (!second_chance.empty()) {
+        fit = fitting::fit_surface(fit->surface, pts, fit->params, weights, options.fit);
+        if (fit->status != fitting::AdaptiveFitResult::Status::NotDone &&
+            fit->status != fitting::AdaptiveFitResult::Status::NumericalError) {
+          for (std::size_t i : second_chance) {
+            if (std::abs(fit->residuals[i]) > bound) weights[i] = 0.0;
+          }
+        }
+      }
     }
     rep.fitted = fit && (fit->status == fitting::AdaptiveFitResult::Status::OK ||
                          fit->status == fitting::AdaptiveFitResult::Status::NoiseNotReached);
