@@ -5,6 +5,7 @@
 // order in the point spacing), while a gross error is the point's alone. A point departing from its prediction
 // by more than `sigmas` robust scales (and `min_departure`) is an outlier.
 
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -22,6 +23,7 @@ struct LocalOutliers {
   std::vector<char> outlier;  // per point
   double scale = 0.0;         // robust scale of the departures, mm
   int count = 0;
+  std::vector<std::uint32_t> nearest;  // each point's nearest other point (for fitting::fit_surface)
 };
 
 // `residuals`: each point's signed distance from the model; `normals`: the model's unit normal there (the local

@@ -35,6 +35,17 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 
 // Fits made at most per face while peeling outliers off (each refit follows a change in the points left out).
 constexpr int kMaxOutlierFits = 4;
+// Whether leaving points out of a fit (or taking them back in) is worth a refit: a point of residual e among n
+// points on m control points moves its control points by about e·m/n, so points whose largest residual moves
+// the fit by less than this fraction of the noise estimate change nothing measurable (a few 5σ points among a
+// million on a few thousand control points move it by a hundredth of σ).
+constexpr double kNegligibleShift = 0.1;
+
+bool moves_fit(double largest_residual, std::size_t points, const fitting::AdaptiveFitResult& fit) {
+  const double per_control_point = static_cast<double>(points) / std::max(fit.control_points, 1);
+  return largest_residual / per_control_point > kNegligibleShift * fit.noise_sigma;
+}
+
 // A left-out point is refitted when the fit made without it misses it by at most this many outlier bounds.
 constexpr double kSecondChance = 2.0;
 
@@ -227,6 +238,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
     std::optional<fitting::AdaptiveFitResult> fit;
     std::vector<double> weights(members.size(), 1.0);
     std::vector<char> gross(members.size(), 0);
+    std::vector<std::uint32_t> neighbours;
     double bound = 0.0;
     if (static_cast<double>(members.size()) >= needed) {
       // Gross outliers first, from their neighbours, so that the fit's refinement never chases them.
@@ -236,7 +248,9 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
         residuals[i] = out.registration.matches[members[i]].distance;
         normals[i] = T.linear() * nurbs::unit_normal(face.surface, params[i].u, params[i].v).n;
       }
-      gross = local_outliers(pts, residuals, normals, options.gross_outliers).outlier;
+      LocalOutliers local = local_outliers(pts, residuals, normals, options.gross_outliers);
+      gross = std::move(local.outlier);
+      neighbours = std::move(local.nearest);
       for (std::size_t i = 0; i < members.size(); ++i) {
         if (gross[i]) weights[i] = 0.0;
       }
@@ -248,21 +262,23 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
       for (int attempt = 0; attempt < kMaxOutlierFits; ++attempt) {
         // A refit starts from the last fit, whose knots already follow the shape: it seldom needs a round of
         // refinement, where starting over would repeat them all.
-        fit = attempt == 0 ? fitting::fit_surface(start, pts, params, weights, options.fit)
-                           : fitting::fit_surface(fit->surface, pts, fit->params, weights, options.fit);
+        fit = attempt == 0 ? fitting::fit_surface(start, pts, params, weights, options.fit, neighbours)
+                           : fitting::fit_surface(fit->surface, pts, fit->params, weights, options.fit, neighbours);
         if (fit->status == fitting::AdaptiveFitResult::Status::NotDone ||
             fit->status == fitting::AdaptiveFitResult::Status::NumericalError) {
           break;
         }
         bound = std::max(options.outlier_sigmas * fit->noise_sigma, options.min_outlier_residual);
         int flagged = 0;
+        double largest = 0.0;
         for (std::size_t i = 0; i < members.size(); ++i) {
           if (weights[i] > 0.0 && std::abs(fit->residuals[i]) > bound) {
             weights[i] = 0.0;
             ++flagged;
+            largest = std::max(largest, std::abs(fit->residuals[i]));
           }
         }
-        if (flagged == 0) break;
+        if (flagged == 0 || !moves_fit(largest, members.size(), *fit)) break;
       }
       // A point left out (one its neighbours did not predict, as a narrow dent's bottom seen through a coarse
       // neighbourhood, or one an earlier, less refined fit missed) is given another chance when the last fit, made
@@ -278,13 +294,16 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
           second_chance.push_back(i);
         }
       }
-      if (!second_chance.empty()) {
-        fit = fitting::fit_surface(fit->surface, pts, fit->params, weights, options.fit);
-        if (fit->status != fitting::AdaptiveFitResult::Status::NotDone &&
-            fit->status != fitting::AdaptiveFitResult::Status::NumericalError) {
-          for (std::size_t i : second_chance) {
-            if (std::abs(fit->residuals[i]) > bound) weights[i] = 0.0;
-          }
+      double largest = 0.0;
+      for (std::size_t i : second_chance) largest = std::max(largest, std::abs(fit->residuals[i]));
+      // Without a refit (the points could not move the fit measurably) their residuals stand as they are.
+      if (!second_chance.empty() && moves_fit(largest, members.size(), *fit)) {
+        fit = fitting::fit_surface(fit->surface, pts, fit->params, weights, options.fit, neighbours);
+      }
+      if (fit->status != fitting::AdaptiveFitResult::Status::NotDone &&
+          fit->status != fitting::AdaptiveFitResult::Status::NumericalError) {
+        for (std::size_t i : second_chance) {
+          if (std::abs(fit->residuals[i]) > bound) weights[i] = 0.0;
         }
       }
     }

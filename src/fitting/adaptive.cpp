@@ -27,10 +27,17 @@ std::vector<double> normal_residuals(const Surface& s, std::span<const Point3> p
   std::vector<double> r(points.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const auto& range) {
     for (std::size_t k = range.begin(); k != range.end(); ++k) {
-      const Point3 S = nurbs::evaluate(s, params[k].u, params[k].v);
+      const nurbs::SurfaceD1 d = nurbs::derivatives_d1(s, params[k].u, params[k].v);
+      const Vector3 e = points[k] - d.S;
+      const Vector3 cross = d.Su.cross(d.Sv);
+      const double length = cross.norm();
+      if (length > 1e-6 * d.Su.norm() * d.Sv.norm()) {
+        r[k] = e.dot(cross / length);
+        continue;
+      }
+      // Near a pole or a collapsed edge: unit_normal's limit; where there is none, the whole gap is the
+      // residual (sign from nothing: positive).
       const nurbs::UnitNormal n = nurbs::unit_normal(s, params[k].u, params[k].v);
-      const Vector3 e = points[k] - S;
-      // Where the surface has no normal, the whole gap is the residual (sign from nothing: positive).
       r[k] = n.status == nurbs::UnitNormal::Status::Degenerate ? e.norm() : e.dot(n.n);
     }
   });
@@ -75,7 +82,8 @@ std::vector<std::uint32_t> nearest_neighbours(std::span<const Point3> points) {
   nurbs::PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const auto& range) {
-    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+    for (std::size_t pos = range.begin(); pos != range.end(); ++pos) {
+      const std::size_t k = tree.vAcc[pos];  // the tree's leaf order: neighbouring queries share cached nodes
       std::uint32_t index[2];
       double dist_sq[2];  // squared (nanoflann)
       nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(2);
@@ -133,13 +141,15 @@ double robust_noise_sigma(std::span<const double> residuals, std::span<const dou
 
 AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> points,
                               std::span<const SurfaceParameter> params, std::span<const double> weights,
-                              const AdaptiveFitOptions& options) {
+                              const AdaptiveFitOptions& options, std::span<const std::uint32_t> given_neighbours) {
   AdaptiveFitResult result{.status = AdaptiveFitResult::Status::NotDone, .surface = start};
   std::vector<SurfaceParameter> t(params.begin(), params.end());
   std::size_t used = 0;
   for (std::size_t k = 0; k < points.size(); ++k) used += weights.empty() || (k < weights.size() && weights[k] > 0.0);
   Surface current = start;
-  const std::vector<std::uint32_t> neighbours = nearest_neighbours(points);
+  std::vector<std::uint32_t> computed;
+  if (given_neighbours.size() != points.size()) computed = nearest_neighbours(points);
+  const std::span<const std::uint32_t> neighbours = computed.empty() ? given_neighbours : std::span<const std::uint32_t>(computed);
 
   for (int round = 0;; ++round) {
     FitResult fit = fit_control_points(current, points, t, weights, options.fit);

@@ -58,10 +58,13 @@ struct AdaptiveFitResult {
 
 // `start` gives degrees, knots and weights, the first iterate and the regularisation's target (the nominal or
 // offset surface); `params` the points' starting parameters on it (e.g. from registration).
+// `neighbours` (each point's nearest other point, see nearest_neighbours) may be given when the caller has
+// them; empty: computed here.
 [[nodiscard]] AdaptiveFitResult fit_surface(const nurbs::Surface& start, std::span<const Point3> points,
                                             std::span<const SurfaceParameter> params,
                                             std::span<const double> weights = {},
-                                            const AdaptiveFitOptions& options = {});
+                                            const AdaptiveFitOptions& options = {},
+                                            std::span<const std::uint32_t> neighbours = {});
 
 // Each point's foot point on `s`, by Newton from its parameters (the point's parameter is kept where Newton
 // does not converge). Parallel, deterministic.

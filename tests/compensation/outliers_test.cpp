@@ -43,7 +43,8 @@ void check(bool scattered) {
   // A good point is flagged only where an irregular neighbourhood cannot resolve the dent; the pipeline
   // re-checks every flagged point against the fit made without it (tests/compensation/pipeline_test.cpp).
   EXPECT_LE(wrong, static_cast<int>(points.size()) / 200);
-  EXPECT_NEAR(found.scale, 0.003 * std::sqrt(1.0 + 6.0 / 20.0), 0.0015) << "noise plus the prediction's own noise";
+  EXPECT_NEAR(found.scale, 0.003 * std::sqrt(1.0 + 6.0 / compensation::LocalOutlierOptions{}.neighbours), 0.0015)
+      << "noise plus the prediction's own noise";
 }
 
 TEST(LocalOutliers, SpikesOnACurvedFieldOnAGrid) { check(false); }
