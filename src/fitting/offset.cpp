@@ -57,9 +57,31 @@ struct TrueOffset {
 // S + d·n and S's principal curvatures from its fundamental forms (with II from n = S_u × S_v / |…|, a
 // principal curvature k > 0 means S bends towards n; the offset's metric scales by 1 − d·k, which vanishes
 // where the offset folds).
-TrueOffset true_offset(const Surface& s, const OffsetDistance& distance, double u, double v) {
+// The offset point alone (no curvatures), from first derivatives: what the fitted samples need.
+TrueOffset offset_point(const Surface& s, const OffsetDistance& distance, const nurbs::SurfaceD2& sd, double u,
+                        double v) {
   TrueOffset out;
-  const nurbs::SurfaceD2 sd = nurbs::derivatives_d2(s, u, v);
+  Vector3 n = sd.Su.cross(sd.Sv);
+  const double len = n.norm();
+  const double a = sd.Su.norm(), b = sd.Sv.norm();
+  if (std::min(a, b) > 1e-7 * std::max(a, b) && len > 1e-6 * a * b) {
+    n /= len;
+  } else {
+    const nurbs::UnitNormal un = nurbs::unit_normal(s, u, v);
+    if (un.status == nurbs::UnitNormal::Status::Degenerate) {
+      out.degenerate = true;
+      return out;
+    }
+    n = un.n;
+  }
+  out.point = sd.S + distance(sd.S) * n;
+  out.normal = n;
+  return out;
+}
+
+TrueOffset true_offset(const Surface& s, const OffsetDistance& distance, const nurbs::SurfaceD2& sd, double u,
+                       double v) {
+  TrueOffset out;
   const double d = distance(sd.S);
   // The normal from these derivatives where they are clearly independent; near a pole or a collapsed edge
   // (a tangent tiny against the other, as unit_normal judges it, or |S_u × S_v| tiny against |S_u||S_v|),
@@ -192,10 +214,14 @@ OffsetResult fit_offset(const Surface& s, const OffsetDistance& distance, double
     const std::vector<double> tv = span_parameters(bv, per_v);
     std::vector<Point3> points(tu.size() * tv.size());
     std::vector<char> bad(points.size(), 0);
+    const nurbs::GridRows sample_rows(s, tv, 1);
     tbb::parallel_for(std::size_t{0}, tu.size(), [&](std::size_t a) {
+      thread_local std::vector<nurbs::SurfaceD2> sd;
+      sd.resize(tv.size());
+      sample_rows.row(tu[a], sd);
       for (std::size_t b = 0; b < tv.size(); ++b) {
         const std::size_t k = a * tv.size() + b;
-        const TrueOffset o = true_offset(s, distance, tu[a], tv[b]);
+        const TrueOffset o = offset_point(s, distance, sd[b], tu[a], tv[b]);
         points[k] = o.point;
         bad[k] = o.degenerate;
       }
@@ -213,36 +239,55 @@ OffsetResult fit_offset(const Surface& s, const OffsetDistance& distance, double
     result.surface = *fitted;
     const Surface& fit = *fitted;
 
-    // The check grid: the deviation and the curvature towards the offset at each point.
+    // The check grid: the deviation and the curvature towards the offset at each point (S's derivatives and the
+    // fit's points by the grid evaluator: the check grid is most of the work).
     const auto cu = check_parameters(bu, options.checks_per_span);
     const auto cv = check_parameters(bv, options.checks_per_span);
-    std::vector<double> deviation(cu.size() * cv.size());
-    std::vector<double> towards(deviation.size());
+    std::vector<double> gu(cu.size()), gv(cv.size());
+    for (std::size_t a = 0; a < cu.size(); ++a) gu[a] = cu[a].first;
+    for (std::size_t b = 0; b < cv.size(); ++b) gv[b] = cv[b].first;
+    const nurbs::GridRows s_rows(s, gv), fit_rows(fit, gv, 0);
+    // Reduced row by row (each row's largest deviation, first largest curvature and the v spans it flags), then
+    // over the rows in order: the same result whatever the thread count, without a grid-sized array.
+    struct RowResult {
+      double deviation = 0.0, towards = 0.0, at_v = 0.0;
+      std::vector<char> flag_v;
+    };
+    std::vector<RowResult> rows(cu.size());
     tbb::parallel_for(std::size_t{0}, cu.size(), [&](std::size_t a) {
+      thread_local std::vector<nurbs::SurfaceD2> sd, fd;
+      sd.resize(gv.size());
+      fd.resize(gv.size());
+      s_rows.row(gu[a], sd);
+      fit_rows.row(gu[a], fd);
+      RowResult& row = rows[a];
+      row.flag_v.assign(bv.size() - 1, 0);
       for (std::size_t b = 0; b < cv.size(); ++b) {
-        const std::size_t k = a * cv.size() + b;
-        const TrueOffset o = true_offset(s, distance, cu[a].first, cv[b].first);
-        deviation[k] = o.degenerate ? std::numeric_limits<double>::infinity()
-                                    : geometric_gap(nurbs::evaluate(fit, cu[a].first, cv[b].first) - o.point, o);
-        towards[k] = o.towards;
+        const TrueOffset o = true_offset(s, distance, sd[b], gu[a], gv[b]);
+        const double deviation =
+            o.degenerate ? std::numeric_limits<double>::infinity() : geometric_gap(fd[b].S - o.point, o);
+        row.deviation = std::max(row.deviation, deviation);
+        if (!(deviation <= options.tolerance)) row.flag_v[static_cast<std::size_t>(cv[b].second)] = 1;
+        if (o.towards > row.towards) {
+          row.towards = o.towards;
+          row.at_v = gv[b];
+        }
       }
     });
     std::vector<char> flag_u(bu.size() - 1, 0), flag_v(bv.size() - 1, 0);
     result.deviation = 0.0;
     double max_towards = 0.0;
     for (std::size_t a = 0; a < cu.size(); ++a) {
-      for (std::size_t b = 0; b < cv.size(); ++b) {
-        const std::size_t k = a * cv.size() + b;
-        result.deviation = std::max(result.deviation, deviation[k]);
-        if (!(deviation[k] <= options.tolerance)) {
-          flag_u[static_cast<std::size_t>(cu[a].second)] = 1;
-          flag_v[static_cast<std::size_t>(cv[b].second)] = 1;
-        }
-        if (towards[k] > max_towards) {
-          max_towards = towards[k];
-          result.at_u = cu[a].first;
-          result.at_v = cv[b].first;
-        }
+      const RowResult& row = rows[a];
+      result.deviation = std::max(result.deviation, row.deviation);
+      if (!(row.deviation <= options.tolerance)) {
+        flag_u[static_cast<std::size_t>(cu[a].second)] = 1;
+        for (std::size_t b = 0; b < flag_v.size(); ++b) flag_v[b] |= row.flag_v[b];
+      }
+      if (row.towards > max_towards) {
+        max_towards = row.towards;
+        result.at_u = cu[a].first;
+        result.at_v = row.at_v;
       }
     }
     result.min_radius_towards_offset = max_towards > 0.0 ? 1.0 / max_towards : std::numeric_limits<double>::infinity();

@@ -126,6 +126,67 @@ SurfaceD2 derivatives_d2(const Surface& s, double u, double v) {
   return r;
 }
 
+GridRows::GridRows(const Surface& s, std::vector<double> tv, int order)
+    : s_(s), tv_(std::move(tv)), order_(std::clamp(order, 0, 2)) {
+  const int q = s.q();
+  const Domain dom = s.domain();
+  span_v_.resize(tv_.size());
+  Nv_.assign(tv_.size() * 3 * static_cast<std::size_t>(q + 1), 0.0);
+  for (std::size_t b = 0; b < tv_.size(); ++b) {
+    const double v = std::clamp(tv_[b], dom.v0, dom.v1);
+    span_v_[b] = s.V().find_span(v);
+    basis_function_derivatives(s.V(), span_v_[b], v, std::min(order_, q), &Nv_[b * 3 * static_cast<std::size_t>(q + 1)]);
+  }
+}
+
+void GridRows::row(double u_in, std::span<SurfaceD2> out) const {
+  const Surface& s = s_;
+  const int p = s.p(), q = s.q(), nv = s.num_v();
+  const int k_max = order_;
+  const Domain dom = s.domain();
+  const double u = std::clamp(u_in, dom.u0, dom.u1);
+  const int span_u = s.U().find_span(u);
+  double Nu[3 * (kMaxDegree + 1)] = {};
+  basis_function_derivatives(s.U(), span_u, u, std::min(k_max, p), Nu);
+  // T[k][j] = Σ_i N_i^(k)(u) Pw_ij: the row's partial sums, for every column j of the net.
+  thread_local std::vector<HomogeneousPoint> T;
+  T.assign(3 * static_cast<std::size_t>(nv), HomogeneousPoint::Zero());
+  for (int k = 0; k <= k_max; ++k) {
+    for (int i = 0; i <= p; ++i) {
+      const double n = Nu[k * (p + 1) + i];
+      if (n == 0.0) continue;
+      const HomogeneousPoint* net_row = &s.homogeneous()[static_cast<std::size_t>((span_u - p + i) * nv)];
+      for (int j = 0; j < nv; ++j) T[static_cast<std::size_t>(k * nv + j)] += n * net_row[j];
+    }
+  }
+  for (std::size_t b = 0; b < tv_.size(); ++b) {
+    const double* N = &Nv_[b * 3 * static_cast<std::size_t>(q + 1)];
+    HomogeneousPoint A[3][3];
+    for (auto& r : A)
+      for (auto& x : r) x.setZero();
+    for (int j = 0; j <= q; ++j) {
+      const std::size_t col = static_cast<std::size_t>(span_v_[b] - q + j);
+      for (int k = 0; k <= k_max; ++k) {
+        for (int l = 0; k + l <= k_max; ++l) A[k][l] += N[l * (q + 1) + j] * T[static_cast<std::size_t>(k * nv) + col];
+      }
+    }
+    // A4.4 as in derivatives_d2.
+    const double w = A[0][0].w();
+    SurfaceD2& r = out[b];
+    r.S = A[0][0].head<3>() / w;
+    r.Su = r.Sv = r.Suu = r.Suv = r.Svv = Vector3::Zero();
+    if (k_max >= 1) {
+      r.Su = (A[1][0].head<3>() - A[1][0].w() * r.S) / w;
+      r.Sv = (A[0][1].head<3>() - A[0][1].w() * r.S) / w;
+    }
+    if (k_max >= 2) {
+      r.Suu = (A[2][0].head<3>() - 2.0 * A[1][0].w() * r.Su - A[2][0].w() * r.S) / w;
+      r.Suv = (A[1][1].head<3>() - A[0][1].w() * r.Su - A[1][0].w() * r.Sv - A[1][1].w() * r.S) / w;
+      r.Svv = (A[0][2].head<3>() - 2.0 * A[0][1].w() * r.Sv - A[0][2].w() * r.S) / w;
+    }
+  }
+}
+
 UnitNormal unit_normal(const Surface& s, double u, double v) {
   // |S_u × S_v| below this fraction of |S_u||S_v| (sine of the angle between the tangents) counts as
   // vanishing: at 1e-10 the normal's direction is still good to about 1e-6 rad from rounding alone.

@@ -3,6 +3,7 @@
 //   S(u,v) = Σ_i Σ_j N_{i,p}(u) N_{j,q}(v) w_ij P_ij / Σ_i Σ_j N_{i,p}(u) N_{j,q}(v) w_ij.
 // Control points are stored homogeneous, Pw_ij = (w_ij P_ij, w_ij), row i (u) major. Weights are positive.
 
+#include <span>
 #include <vector>
 
 #include "nurbs/knot_vector.hpp"
@@ -57,6 +58,24 @@ struct SurfaceD2 {
 [[nodiscard]] SurfaceD1 derivatives_d1(const Surface& s, double u, double v);
 // A3.6 on the homogeneous net, then A4.4 for the rational derivatives (including the mixed S_uv).
 [[nodiscard]] SurfaceD2 derivatives_d2(const Surface& s, double u, double v);
+
+// derivatives_d2 on a grid, row by row, to the same formulas: for a fixed u, at every v of `tv`. The tensor
+// product is summed in A3.6's two stages, so the u basis and the partial sums over i are made once per row, not
+// once per point: several times faster on a dense grid. `order` 0 or 1 leaves the higher derivatives zero.
+class GridRows {
+ public:
+  GridRows(const Surface& s, std::vector<double> tv, int order = 2);
+  // out[b] = the derivatives at (u, tv[b]); out must hold tv.size() entries. Thread-safe (const).
+  void row(double u, std::span<SurfaceD2> out) const;
+  [[nodiscard]] std::size_t size() const { return tv_.size(); }
+
+ private:
+  const Surface& s_;
+  std::vector<double> tv_;
+  int order_;
+  std::vector<int> span_v_;
+  std::vector<double> Nv_;  // per column b: 3 × (q + 1) basis derivatives
+};
 
 struct UnitNormal {
   enum class Status {

@@ -136,3 +136,36 @@ TEST(Surface, RejectsInconsistentNets) {
 
 }  // namespace
 }  // namespace probecomp::nurbs
+
+namespace {
+
+// The grid evaluator is the point evaluator, summed in another order: equal to rounding.
+TEST(GridRows, EqualThePointwiseDerivativesOnARationalSurface) {
+  using namespace probecomp;
+  const nurbs::Surface s = probecomp::testing::random_rational_surface(5, {.p = 3, .q = 2, .nu = 9, .nv = 7});
+  std::vector<double> tu, tv;
+  for (int a = 0; a <= 40; ++a) tu.push_back(a / 40.0);
+  for (int b = 0; b <= 33; ++b) tv.push_back(b / 33.0);
+  const nurbs::GridRows rows(s, tv), first_rows(s, tv, 1);
+  std::vector<nurbs::SurfaceD2> grid(tu.size() * tv.size()), first(grid.size());
+  for (std::size_t a = 0; a < tu.size(); ++a) {
+    rows.row(tu[a], std::span<nurbs::SurfaceD2>(grid).subspan(a * tv.size(), tv.size()));
+    first_rows.row(tu[a], std::span<nurbs::SurfaceD2>(first).subspan(a * tv.size(), tv.size()));
+  }
+  double worst = 0.0;
+  for (std::size_t a = 0; a < tu.size(); ++a) {
+    for (std::size_t b = 0; b < tv.size(); ++b) {
+      const nurbs::SurfaceD2 d = nurbs::derivatives_d2(s, tu[a], tv[b]);
+      const nurbs::SurfaceD2& g = grid[a * tv.size() + b];
+      const double size = 1.0 + d.S.norm() + d.Su.norm() + d.Sv.norm() + d.Suu.norm() + d.Suv.norm() + d.Svv.norm();
+      for (const auto& [x, y] : {std::pair{d.S, g.S}, {d.Su, g.Su}, {d.Sv, g.Sv}, {d.Suu, g.Suu}, {d.Suv, g.Suv}, {d.Svv, g.Svv}}) {
+        worst = std::max(worst, (x - y).norm() / size);
+      }
+      EXPECT_EQ(first[a * tv.size() + b].Suu, Vector3::Zero());
+      EXPECT_LT((first[a * tv.size() + b].Su - d.Su).norm() / size, 1e-13);
+    }
+  }
+  EXPECT_LT(worst, 1e-13);
+}
+
+}  // namespace
