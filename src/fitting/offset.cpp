@@ -54,10 +54,10 @@ struct TrueOffset {
   bool degenerate = false;
 };
 
-// S + d·n and S's principal curvatures from its fundamental forms (with II from n = S_u × S_v / |…|, a
-// principal curvature k > 0 means S bends towards n; the offset's metric scales by 1 − d·k, which vanishes
-// where the offset folds).
-// The offset point alone (no curvatures), from first derivatives: what the fitted samples need.
+// The offset point alone (no curvatures), from S's first derivatives: what the fitted samples need. The normal
+// comes from these derivatives where they are clearly independent; near a pole or a collapsed edge (a tangent
+// tiny against the other, as unit_normal judges it, or |S_u × S_v| tiny against |S_u||S_v|), it is unit_normal's
+// limit from the neighbourhood.
 TrueOffset offset_point(const Surface& s, const OffsetDistance& distance, const nurbs::SurfaceD2& sd, double u,
                         double v) {
   TrueOffset out;
@@ -79,28 +79,15 @@ TrueOffset offset_point(const Surface& s, const OffsetDistance& distance, const 
   return out;
 }
 
+// S + d·n and S's principal curvatures from its fundamental forms (with II from n = S_u × S_v / |…|, a
+// principal curvature k > 0 means S bends towards n; the offset's metric scales by 1 − d·k, which vanishes
+// where the offset folds).
 TrueOffset true_offset(const Surface& s, const OffsetDistance& distance, const nurbs::SurfaceD2& sd, double u,
                        double v) {
-  TrueOffset out;
+  TrueOffset out = offset_point(s, distance, sd, u, v);
+  if (out.degenerate) return out;
+  const Vector3& n = out.normal;
   const double d = distance(sd.S);
-  // The normal from these derivatives where they are clearly independent; near a pole or a collapsed edge
-  // (a tangent tiny against the other, as unit_normal judges it, or |S_u × S_v| tiny against |S_u||S_v|),
-  // unit_normal's limit from the neighbourhood.
-  Vector3 n = sd.Su.cross(sd.Sv);
-  const double len = n.norm();
-  const double a = sd.Su.norm(), b = sd.Sv.norm();
-  if (std::min(a, b) > 1e-7 * std::max(a, b) && len > 1e-6 * a * b) {
-    n /= len;
-  } else {
-    const nurbs::UnitNormal un = nurbs::unit_normal(s, u, v);
-    if (un.status == nurbs::UnitNormal::Status::Degenerate) {
-      out.degenerate = true;
-      return out;
-    }
-    n = un.n;
-  }
-  out.point = sd.S + d * n;
-  out.normal = n;
   const double E = sd.Su.dot(sd.Su), F = sd.Su.dot(sd.Sv), G = sd.Sv.dot(sd.Sv);
   const double L = sd.Suu.dot(n), M = sd.Suv.dot(n), N = sd.Svv.dot(n);
   const double det = E * G - F * F;
