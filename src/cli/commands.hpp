@@ -52,7 +52,7 @@ std::string raw_points_csv(const std::vector<simulation::Touch>& touches,
                            const std::vector<simulation::ProgrammedPoint>& plan, bool numbered);
 
 struct StudyArgs {
-  std::string name, output_dir;
+  std::string name, output_dir = "probecomp-study";
   studies::RegistrationStudyOptions registration;
   std::string metric = "point-to-plane", loss = "cauchy";
   double noise = -1.0;  // mm; < 0: the study's own

@@ -188,7 +188,8 @@ int main(int argc, char** argv) {
                     "freeform: the demo's free-form case (Table 2)")
       ->required()
       ->check(CLI::IsMember(cli::kStudyNames));
-  study->add_option("--output-dir", study_args.output_dir, "Directory for NAME.json (summary) and NAME.csv (series)");
+  study->add_option("--output-dir", study_args.output_dir,
+                    "Directory for NAME.json (summary) and NAME.csv (series); default probecomp-study");
   study->add_option("--noise", study_args.noise,
                     "registration, freeform: Gaussian noise sigma on each coordinate of the raw centres, mm "
                     "(default: 0 and 0.0045)")

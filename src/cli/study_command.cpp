@@ -31,6 +31,8 @@ void write_study_files(const std::string& dir, const std::string& name, const st
   std::filesystem::create_directories(dir);
   io::write_file_atomically(std::filesystem::path(dir) / (name + ".csv"), csv);
   io::write_file_atomically(std::filesystem::path(dir) / (name + ".json"), json);
+  std::cout << "Wrote " << (std::filesystem::path(dir) / (name + ".csv")).string() << " (the series) and " << name
+            << ".json (the summary).\n";
 }
 
 std::string json_summary(const studies::ErrorSummary& s) {
