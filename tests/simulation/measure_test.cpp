@@ -8,6 +8,7 @@
 #include <gp_Vec.hxx>
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 
 #include "cad/locator.hpp"
@@ -69,6 +70,9 @@ Checked check_touches(const cad::Model& actual, const std::vector<simulation::Pr
     const gp_Vec n = du.Crossed(dv) * static_cast<double>(face.outward);
     EXPECT_GT(Vector3(n.X(), n.Y(), n.Z()).dot(t.centre - Point3(foot.X(), foot.Y(), foot.Z())), 0.0) << k;
   }
+  std::printf("%d touches: off the line by at most %.1e mm, |distance - r| at most %.1e mm (OpenCASCADE), contact "
+              "within %.1e mm of OpenCASCADE's foot point\n",
+              c.touched, c.worst_line, c.worst_distance, c.worst_contact);
   return c;
 }
 
