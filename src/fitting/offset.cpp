@@ -46,6 +46,23 @@ std::vector<std::pair<double, int>> check_parameters(const std::vector<double>& 
   return t;
 }
 
+// Knots that cut each span missing the tolerance into enough equal pieces for the fit to meet it, from the
+// approximation's order: its error shrinks as h^(p+1), so a span off by a factor f needs f^(1/(p+1)) pieces
+// (at least 2, at most kMaxPieces; a round that still misses refines again). Fewer rounds than halving, and
+// each round's check grid is most of the cost.
+constexpr int kMaxPieces = 4;
+std::vector<double> subdividing_knots(const std::vector<double>& breaks, const std::vector<double>& deviation,
+                                      double tolerance, int degree) {
+  std::vector<double> X;
+  for (std::size_t s = 0; s + 1 < breaks.size(); ++s) {
+    if (deviation[s] <= tolerance) continue;
+    const double factor = std::isfinite(deviation[s]) ? deviation[s] / tolerance : 1e300;
+    const int pieces = std::clamp(static_cast<int>(std::ceil(std::pow(factor, 1.0 / (degree + 1)))), 2, kMaxPieces);
+    for (int k = 1; k < pieces; ++k) X.push_back(breaks[s] + (breaks[s + 1] - breaks[s]) * k / pieces);
+  }
+  return X;
+}
+
 struct TrueOffset {
   Point3 point;
   Vector3 normal = Vector3::Zero();  // n of S, which is also the offset's normal
@@ -238,7 +255,7 @@ OffsetResult fit_offset(const Surface& s, const OffsetDistance& distance, double
     // over the rows in order: the same result whatever the thread count, without a grid-sized array.
     struct RowResult {
       double deviation = 0.0, towards = 0.0, at_v = 0.0;
-      std::vector<char> flag_v;
+      std::vector<double> deviation_v;  // largest deviation in each v span along this row
     };
     std::vector<RowResult> rows(cu.size());
     tbb::parallel_for(std::size_t{0}, cu.size(), [&](std::size_t a) {
@@ -248,28 +265,30 @@ OffsetResult fit_offset(const Surface& s, const OffsetDistance& distance, double
       s_rows.row(gu[a], sd);
       fit_rows.row(gu[a], fd);
       RowResult& row = rows[a];
-      row.flag_v.assign(bv.size() - 1, 0);
+      row.deviation_v.assign(bv.size() - 1, 0.0);
       for (std::size_t b = 0; b < cv.size(); ++b) {
         const TrueOffset o = true_offset(s, distance, sd[b], gu[a], gv[b]);
         const double deviation =
             o.degenerate ? std::numeric_limits<double>::infinity() : geometric_gap(fd[b].S - o.point, o);
         row.deviation = std::max(row.deviation, deviation);
-        if (!(deviation <= options.tolerance)) row.flag_v[static_cast<std::size_t>(cv[b].second)] = 1;
+        double& in_span = row.deviation_v[static_cast<std::size_t>(cv[b].second)];
+        in_span = std::max(in_span, deviation);
         if (o.towards > row.towards) {
           row.towards = o.towards;
           row.at_v = gv[b];
         }
       }
     });
-    std::vector<char> flag_u(bu.size() - 1, 0), flag_v(bv.size() - 1, 0);
+    std::vector<double> deviation_u(bu.size() - 1, 0.0), deviation_v(bv.size() - 1, 0.0);
     result.deviation = 0.0;
     double max_towards = 0.0;
     for (std::size_t a = 0; a < cu.size(); ++a) {
       const RowResult& row = rows[a];
       result.deviation = std::max(result.deviation, row.deviation);
+      double& in_span = deviation_u[static_cast<std::size_t>(cu[a].second)];
+      in_span = std::max(in_span, row.deviation);
       if (!(row.deviation <= options.tolerance)) {
-        flag_u[static_cast<std::size_t>(cu[a].second)] = 1;
-        for (std::size_t b = 0; b < flag_v.size(); ++b) flag_v[b] |= row.flag_v[b];
+        for (std::size_t b = 0; b < deviation_v.size(); ++b) deviation_v[b] = std::max(deviation_v[b], row.deviation_v[b]);
       }
       if (row.towards > max_towards) {
         max_towards = row.towards;
@@ -288,8 +307,8 @@ OffsetResult fit_offset(const Surface& s, const OffsetDistance& distance, double
     }
     if (round + 1 == options.max_rounds) break;
     if (static_cast<double>(base.num_u()) * base.num_v() > kMaxControlPoints) break;
-    std::vector<double> xu = flagged_span_midpoints(bu, flag_u);
-    std::vector<double> xv = flagged_span_midpoints(bv, flag_v);
+    std::vector<double> xu = subdividing_knots(bu, deviation_u, options.tolerance, base.p());
+    std::vector<double> xv = subdividing_knots(bv, deviation_v, options.tolerance, base.q());
     if (round == 0) {
       const std::vector<double> ku = continuity_knots(base.U());
       const std::vector<double> kv = continuity_knots(base.V());

@@ -2,8 +2,9 @@
 // Offset surface S + d·n as a NURBS (DESIGN.md §2 step 2: the probe-centre surface is the part surface offset
 // by the tip radius). Same degrees and parametrisation as S, so a trimmed face keeps its trim: samples of the
 // true offset at about 3 parameters per knot span are fitted by least squares with S's knots and weights;
-// the fit is checked against the true offset on a denser grid, and knots are inserted (into S's knot vectors,
-// shape unchanged) in the spans that miss the tolerance, until it holds or the rounds run out.
+// the fit is checked against the true offset on a denser grid, and the spans that miss the tolerance are cut
+// (knots inserted into S's knot vectors, shape unchanged) into as many pieces as the fit's order h^(p+1) says
+// they need, until it holds or the rounds run out.
 
 #include <functional>
 
