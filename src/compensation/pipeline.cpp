@@ -244,10 +244,10 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
       // Gross outliers first, from their neighbours, so that the fit's refinement never chases them.
       std::vector<double> residuals(members.size());
       std::vector<Vector3> normals(members.size());
-      for (std::size_t i = 0; i < members.size(); ++i) {
+      tbb::parallel_for(std::size_t{0}, members.size(), [&](std::size_t i) {
         residuals[i] = out.registration.matches[members[i]].distance;
         normals[i] = T.linear() * nurbs::unit_normal(face.surface, params[i].u, params[i].v).n;
-      }
+      });
       LocalOutliers local = local_outliers(pts, residuals, normals, options.gross_outliers);
       gross = std::move(local.outlier);
       neighbours = std::move(local.nearest);

@@ -197,9 +197,16 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     const std::size_t nsu = bu.size() - 1, nsv = bv.size() - 1;
     std::vector<double> chi2(nsu * nsv, 0.0);
     std::vector<int> count(nsu * nsv, 0);
+    // Each point's span in parallel; the sums in point order (the same whatever the thread count).
+    std::vector<std::size_t> span(points.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096), [&](const auto& range) {
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        span[k] = static_cast<std::size_t>(span_of(bu, t[k].u)) * nsv + static_cast<std::size_t>(span_of(bv, t[k].v));
+      }
+    });
     for (std::size_t k = 0; k < points.size(); ++k) {
       if (!weights.empty() && !(weights[k] > 0.0)) continue;
-      const std::size_t s = static_cast<std::size_t>(span_of(bu, t[k].u)) * nsv + static_cast<std::size_t>(span_of(bv, t[k].v));
+      const std::size_t s = span[k];
       chi2[s] += (result.residuals[k] / sigma) * (result.residuals[k] / sigma);
       ++count[s];
     }

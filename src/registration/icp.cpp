@@ -6,6 +6,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <array>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -54,17 +56,32 @@ bool usable(const cad::ModelPoint& m, double max_distance) {
 Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::ModelPoint> feet, std::span<const double> w,
               const Point3& c, double L) {
   Step step;
-  // Sums in input order: the result does not depend on the thread count.
+  // Partial sums over a fixed number of consecutive chunks, in parallel, then added in chunk order: the result
+  // does not depend on the thread count.
+  constexpr std::size_t kChunks = 64;
+  std::array<Matrix6, kChunks> Hc;
+  std::array<Twist, kChunks> gc;
+  tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t chunk) {
+    Matrix6 Hp = Matrix6::Zero();
+    Twist gp = Twist::Zero();
+    const std::size_t first = x.size() * chunk / kChunks, last = x.size() * (chunk + 1) / kChunks;
+    for (std::size_t i = first; i < last; ++i) {
+      if (w[i] == 0.0) continue;
+      const Vector3& n = feet[i].normal;
+      Twist J;
+      J.head<3>() = (x[i] - c).cross(n) / L;
+      J.tail<3>() = n;
+      Hp.selfadjointView<Eigen::Lower>().rankUpdate(J, w[i]);
+      gp += w[i] * n.dot(x[i] - feet[i].point) * J;
+    }
+    Hc[chunk] = Hp;
+    gc[chunk] = gp;
+  });
   Matrix6 H = Matrix6::Zero();
   Twist g = Twist::Zero();
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    if (w[i] == 0.0) continue;
-    const Vector3& n = feet[i].normal;
-    Twist J;
-    J.head<3>() = (x[i] - c).cross(n) / L;
-    J.tail<3>() = n;
-    H.selfadjointView<Eigen::Lower>().rankUpdate(J, w[i]);
-    g += w[i] * n.dot(x[i] - feet[i].point) * J;
+  for (std::size_t chunk = 0; chunk < kChunks; ++chunk) {
+    H += Hc[chunk];
+    g += gc[chunk];
   }
   H = H.selfadjointView<Eigen::Lower>();
   const Eigen::SelfAdjointEigenSolver<Matrix6> eig(H);
