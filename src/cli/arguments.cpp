@@ -4,6 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "cli/format.hpp"
 #include "io/text.hpp"
 
 namespace probecomp::cli {
@@ -34,6 +35,12 @@ std::vector<double> numbers(const std::string& text, const std::string& what) {
 }
 
 }  // namespace
+
+void check_probe_radius(double r) {
+  if (!(r > 0.0) || !std::isfinite(r)) {
+    throw std::invalid_argument("--probe-radius must be a positive number of mm, not " + fmt("%g", r));
+  }
+}
 
 std::vector<int> parse_face_list(const std::string& list) {
   std::vector<int> faces;

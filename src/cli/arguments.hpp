@@ -10,6 +10,9 @@
 
 namespace probecomp::cli {
 
+// --probe-radius: a positive, finite number of mm.
+void check_probe_radius(double r);
+
 // "0,3,5-9" → {0, 3, 5, 6, 7, 8, 9} (--faces).
 [[nodiscard]] std::vector<int> parse_face_list(const std::string& list);
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "cad/model.hpp"
+#include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "cli/format.hpp"
 #include "compensation/pipeline.hpp"
@@ -31,12 +32,6 @@ struct Progress {
     std::cerr << "probecomp: [" << fmt("%3.0f", 100.0 * fraction) << "%] " << stage << "\n";
   }
 };
-
-void check_radius(double r) {
-  if (!(r > 0.0) || !std::isfinite(r)) {
-    throw std::invalid_argument("--probe-radius must be a positive number of mm, not " + fmt("%g", r));
-  }
-}
 
 bool has_extension(const std::string& path, std::initializer_list<const char*> extensions) {
   const std::string e = io::lower(std::filesystem::path(path).extension().string());
@@ -175,7 +170,7 @@ struct Loaded {
 };
 
 Loaded load(const std::string& cad_path, const std::string& points_path, double r) {
-  check_radius(r);
+  check_probe_radius(r);
   const auto t0 = Clock::now();
   Loaded l{io::read_points(points_path), cad::read_model(cad_path), 0.0};
   l.seconds = since(t0);

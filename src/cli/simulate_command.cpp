@@ -101,9 +101,7 @@ std::string raw_points_csv(const std::vector<simulation::Touch>& touches,
 }
 
 int run_simulate(const SimulateArgs& a) {
-  if (!(a.probe_radius > 0.0)) {
-    throw std::invalid_argument("--probe-radius must be a positive number of mm, not " + fmt("%g", a.probe_radius));
-  }
+  check_probe_radius(a.probe_radius);
   if (!(a.noise >= 0.0)) throw std::invalid_argument("--noise must be a non-negative number of mm");
   simulation::Deformation deformation;
   for (const std::string& spec : a.deform) add_deformation(spec, deformation);

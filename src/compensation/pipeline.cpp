@@ -264,10 +264,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
         // refinement, where starting over would repeat them all.
         fit = attempt == 0 ? fitting::fit_surface(start, pts, params, weights, options.fit, neighbours)
                            : fitting::fit_surface(fit->surface, pts, fit->params, weights, options.fit, neighbours);
-        if (fit->status == fitting::AdaptiveFitResult::Status::NotDone ||
-            fit->status == fitting::AdaptiveFitResult::Status::NumericalError) {
-          break;
-        }
+        if (!fit->fitted()) break;
         bound = std::max(options.outlier_sigmas * fit->noise_sigma, options.min_outlier_residual);
         int flagged = 0;
         double largest = 0.0;
@@ -285,30 +282,26 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
       // without it, passes within twice the bound (left out, a point that alone carries a feature is missed by
       // more than it would be with it; gross errors are missed by far more). The face is refitted with those
       // points, and any that the new fit still misses by more than the bound is left out again.
-      const bool usable = fit && fit->status != fitting::AdaptiveFitResult::Status::NotDone &&
-                          fit->status != fitting::AdaptiveFitResult::Status::NumericalError;
       std::vector<std::size_t> second_chance;
-      for (std::size_t i = 0; usable && i < members.size(); ++i) {
+      double largest = 0.0;
+      for (std::size_t i = 0; fit->fitted() && i < members.size(); ++i) {
         if (weights[i] == 0.0 && std::abs(fit->residuals[i]) <= kSecondChance * bound) {
           weights[i] = 1.0;
           second_chance.push_back(i);
+          largest = std::max(largest, std::abs(fit->residuals[i]));
         }
       }
-      double largest = 0.0;
-      for (std::size_t i : second_chance) largest = std::max(largest, std::abs(fit->residuals[i]));
       // Without a refit (the points could not move the fit measurably) their residuals stand as they are.
       if (!second_chance.empty() && moves_fit(largest, members.size(), *fit)) {
         fit = fitting::fit_surface(fit->surface, pts, fit->params, weights, options.fit, neighbours);
       }
-      if (fit->status != fitting::AdaptiveFitResult::Status::NotDone &&
-          fit->status != fitting::AdaptiveFitResult::Status::NumericalError) {
+      if (fit->fitted()) {
         for (std::size_t i : second_chance) {
           if (std::abs(fit->residuals[i]) > bound) weights[i] = 0.0;
         }
       }
     }
-    rep.fitted = fit && (fit->status == fitting::AdaptiveFitResult::Status::OK ||
-                         fit->status == fitting::AdaptiveFitResult::Status::NoiseNotReached);
+    rep.fitted = fit && fit->fitted();
     const auto tc = Clock::now();
     if (rep.fitted) {
       rep.fit_status = fit->status;

@@ -29,15 +29,8 @@ std::vector<double> normal_residuals(const Surface& s, std::span<const Point3> p
     for (std::size_t k = range.begin(); k != range.end(); ++k) {
       const nurbs::SurfaceD1 d = nurbs::derivatives_d1(s, params[k].u, params[k].v);
       const Vector3 e = points[k] - d.S;
-      const Vector3 cross = d.Su.cross(d.Sv);
-      const double length = cross.norm();
-      if (length > 1e-6 * d.Su.norm() * d.Sv.norm()) {
-        r[k] = e.dot(cross / length);
-        continue;
-      }
-      // Near a pole or a collapsed edge: unit_normal's limit; where there is none, the whole gap is the
-      // residual (sign from nothing: positive).
-      const nurbs::UnitNormal n = nurbs::unit_normal(s, params[k].u, params[k].v);
+      const nurbs::UnitNormal n = nurbs::unit_normal(s, params[k].u, params[k].v, d.Su, d.Sv);
+      // Where the surface has no normal, the whole gap is the residual (sign from nothing: positive).
       r[k] = n.status == nurbs::UnitNormal::Status::Degenerate ? e.norm() : e.dot(n.n);
     }
   });

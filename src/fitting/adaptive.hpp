@@ -54,6 +54,8 @@ struct AdaptiveFitResult {
   int spans_above_noise = 0;
 
   [[nodiscard]] bool ok() const { return status == Status::OK; }
+  // A surface was fitted (OK or NoiseNotReached): `surface`, `params` and `residuals` describe it.
+  [[nodiscard]] bool fitted() const { return status == Status::OK || status == Status::NoiseNotReached; }
 };
 
 // `start` gives degrees, knots and weights, the first iterate and the regularisation's target (the nominal or

@@ -71,28 +71,17 @@ struct TrueOffset {
   bool degenerate = false;
 };
 
-// The offset point alone (no curvatures), from S's first derivatives: what the fitted samples need. The normal
-// comes from these derivatives where they are clearly independent; near a pole or a collapsed edge (a tangent
-// tiny against the other, as unit_normal judges it, or |S_u × S_v| tiny against |S_u||S_v|), it is unit_normal's
-// limit from the neighbourhood.
+// The offset point alone (no curvatures), from S's first derivatives: what the fitted samples need.
 TrueOffset offset_point(const Surface& s, const OffsetDistance& distance, const nurbs::SurfaceD2& sd, double u,
                         double v) {
   TrueOffset out;
-  Vector3 n = sd.Su.cross(sd.Sv);
-  const double len = n.norm();
-  const double a = sd.Su.norm(), b = sd.Sv.norm();
-  if (std::min(a, b) > 1e-7 * std::max(a, b) && len > 1e-6 * a * b) {
-    n /= len;
-  } else {
-    const nurbs::UnitNormal un = nurbs::unit_normal(s, u, v);
-    if (un.status == nurbs::UnitNormal::Status::Degenerate) {
-      out.degenerate = true;
-      return out;
-    }
-    n = un.n;
+  const nurbs::UnitNormal n = nurbs::unit_normal(s, u, v, sd.Su, sd.Sv);
+  if (n.status == nurbs::UnitNormal::Status::Degenerate) {
+    out.degenerate = true;
+    return out;
   }
-  out.point = sd.S + distance(sd.S) * n;
-  out.normal = n;
+  out.point = sd.S + distance(sd.S) * n.n;
+  out.normal = n.n;
   return out;
 }
 

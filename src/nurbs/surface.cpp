@@ -89,6 +89,28 @@ void homogeneous_derivatives(const Surface& s, double u, double v, HomogeneousPo
   }
 }
 
+// A4.4 written out for k + l <= order (at most 2), with A = homogeneous point part and w its weight part:
+//   S^{kl} = (A^{kl} - Σ_{j=1..l} C(l,j) w^{0j} S^{k,l-j} - Σ_{i=1..k} C(k,i) w^{i0} S^{k-i,l}
+//             - Σ_{i=1..k} Σ_{j=1..l} C(k,i) C(l,j) w^{ij} S^{k-i,l-j}) / w.
+// The mixed term needs all three sums (tinynurbs drops one); tests check it by central differences. Orders above
+// `order` are left zero.
+SurfaceD2 rational_derivatives(const HomogeneousPoint (&A)[3][3], int order) {
+  const double w = A[0][0].w();
+  SurfaceD2 r;
+  r.S = A[0][0].head<3>() / w;
+  r.Su = r.Sv = r.Suu = r.Suv = r.Svv = Vector3::Zero();
+  if (order >= 1) {
+    r.Su = (A[1][0].head<3>() - A[1][0].w() * r.S) / w;
+    r.Sv = (A[0][1].head<3>() - A[0][1].w() * r.S) / w;
+  }
+  if (order >= 2) {
+    r.Suu = (A[2][0].head<3>() - 2.0 * A[1][0].w() * r.Su - A[2][0].w() * r.S) / w;
+    r.Suv = (A[1][1].head<3>() - A[0][1].w() * r.Su - A[1][0].w() * r.Sv - A[1][1].w() * r.S) / w;
+    r.Svv = (A[0][2].head<3>() - 2.0 * A[0][1].w() * r.Sv - A[0][2].w() * r.S) / w;
+  }
+  return r;
+}
+
 }  // namespace
 
 Point3 evaluate(const Surface& s, double u, double v) {
@@ -111,19 +133,7 @@ SurfaceD1 derivatives_d1(const Surface& s, double u, double v) {
 SurfaceD2 derivatives_d2(const Surface& s, double u, double v) {
   HomogeneousPoint A[3][3];
   homogeneous_derivatives<2>(s, u, v, A);
-  // A4.4 written out for k + l <= 2, with A = homogeneous point part and w its weight part:
-  //   S^{kl} = (A^{kl} - Σ_{j=1..l} C(l,j) w^{0j} S^{k,l-j} - Σ_{i=1..k} C(k,i) w^{i0} S^{k-i,l}
-  //             - Σ_{i=1..k} Σ_{j=1..l} C(k,i) C(l,j) w^{ij} S^{k-i,l-j}) / w.
-  // The mixed term needs all three sums (tinynurbs drops one); tests check it by central differences.
-  const double w = A[0][0].w();
-  SurfaceD2 r;
-  r.S = A[0][0].head<3>() / w;
-  r.Su = (A[1][0].head<3>() - A[1][0].w() * r.S) / w;
-  r.Sv = (A[0][1].head<3>() - A[0][1].w() * r.S) / w;
-  r.Suu = (A[2][0].head<3>() - 2.0 * A[1][0].w() * r.Su - A[2][0].w() * r.S) / w;
-  r.Suv = (A[1][1].head<3>() - A[0][1].w() * r.Su - A[1][0].w() * r.Sv - A[1][1].w() * r.S) / w;
-  r.Svv = (A[0][2].head<3>() - 2.0 * A[0][1].w() * r.Sv - A[0][2].w() * r.S) / w;
-  return r;
+  return rational_derivatives(A, 2);
 }
 
 GridRows::GridRows(const Surface& s, std::vector<double> tv, int order)
@@ -170,24 +180,16 @@ void GridRows::row(double u_in, std::span<SurfaceD2> out) const {
         for (int l = 0; k + l <= k_max; ++l) A[k][l] += N[l * (q + 1) + j] * T[static_cast<std::size_t>(k * nv) + col];
       }
     }
-    // A4.4 as in derivatives_d2.
-    const double w = A[0][0].w();
-    SurfaceD2& r = out[b];
-    r.S = A[0][0].head<3>() / w;
-    r.Su = r.Sv = r.Suu = r.Suv = r.Svv = Vector3::Zero();
-    if (k_max >= 1) {
-      r.Su = (A[1][0].head<3>() - A[1][0].w() * r.S) / w;
-      r.Sv = (A[0][1].head<3>() - A[0][1].w() * r.S) / w;
-    }
-    if (k_max >= 2) {
-      r.Suu = (A[2][0].head<3>() - 2.0 * A[1][0].w() * r.Su - A[2][0].w() * r.S) / w;
-      r.Suv = (A[1][1].head<3>() - A[0][1].w() * r.Su - A[1][0].w() * r.Sv - A[1][1].w() * r.S) / w;
-      r.Svv = (A[0][2].head<3>() - 2.0 * A[0][1].w() * r.Sv - A[0][2].w() * r.S) / w;
-    }
+    out[b] = rational_derivatives(A, k_max);
   }
 }
 
 UnitNormal unit_normal(const Surface& s, double u, double v) {
+  const SurfaceD1 d = derivatives_d1(s, u, v);
+  return unit_normal(s, u, v, d.Su, d.Sv);
+}
+
+UnitNormal unit_normal(const Surface& s, double u, double v, const Vector3& Su, const Vector3& Sv) {
   // |S_u × S_v| below this fraction of |S_u||S_v| (sine of the angle between the tangents) counts as
   // vanishing: at 1e-10 the normal's direction is still good to about 1e-6 rad from rounding alone.
   constexpr double kParallelTangents = 1e-10;
@@ -195,10 +197,9 @@ UnitNormal unit_normal(const Surface& s, double u, double v) {
   // direction is noise (the edge's coincident control points differ in their last bits), so S_u × S_v is
   // meaningless there even when not small. Points this close to a pole are given its limit normal.
   constexpr double kCollapsedTangent = 1e-7;
-  const SurfaceD1 d = derivatives_d1(s, u, v);
-  Vector3 n = d.Su.cross(d.Sv);
-  const double scale = d.Su.norm() * d.Sv.norm();
-  const bool collapsed = std::min(d.Su.norm(), d.Sv.norm()) <= kCollapsedTangent * std::max(d.Su.norm(), d.Sv.norm());
+  Vector3 n = Su.cross(Sv);
+  const double scale = Su.norm() * Sv.norm();
+  const bool collapsed = std::min(Su.norm(), Sv.norm()) <= kCollapsedTangent * std::max(Su.norm(), Sv.norm());
   if (!collapsed && n.norm() > kParallelTangents * scale && n.norm() > 0.0) return {UnitNormal::Status::OK, n.normalized()};
 
   // At a collapsed edge one tangent vanishes; the normal is its limit from inside the domain. If S_u = 0 along

@@ -88,6 +88,8 @@ struct UnitNormal {
 };
 // The unit normal in the direction of S_u × S_v (which may point into or out of the material).
 [[nodiscard]] UnitNormal unit_normal(const Surface& s, double u, double v);
+// The same from S_u and S_v the caller has already evaluated at (u, v): no evaluation unless (u, v) is at a pole.
+[[nodiscard]] UnitNormal unit_normal(const Surface& s, double u, double v, const Vector3& Su, const Vector3& Sv);
 
 // Axis-aligned box of the control points: it contains the surface (convex-hull property, weights > 0).
 [[nodiscard]] BoundingBox bounding_box(const Surface& s);
