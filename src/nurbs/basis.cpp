@@ -91,7 +91,63 @@ void derivatives_impl(const KnotVector& U, int span, double u, int n, double* de
 
 }  // namespace
 
+namespace {
+
+// On a Bézier span (its p knots on each side all equal to its ends, as after refinement to Bézier form) the basis
+// functions are the Bernstein polynomials of t = (u − a)/(b − a): from the triangle B^d_i = (1−t) B^{d−1}_i +
+// t B^{d−1}_{i−1}, the k-th derivative is p!/(p−k)!/(b−a)^k times the k-th difference of B^{p−k} (The NURBS Book
+// eqs. 1.7, 1.9). A fraction of A2.3's work, for the closest-point search, which evaluates only Bézier spans.
+bool is_bezier_span(const KnotVector& U, int span) {
+  const int p = U.degree();
+  const auto& k = U.knots();
+  for (int i = 1; i < p; ++i) {
+    if (k[static_cast<std::size_t>(span - i)] != k[static_cast<std::size_t>(span)] ||
+        k[static_cast<std::size_t>(span + 1 + i)] != k[static_cast<std::size_t>(span + 1)]) {
+      return false;
+    }
+  }
+  return true;
+}
+
+template <int P>
+void bernstein_impl(const KnotVector& U, int span, double u, int n, double* ders) {
+  const int p = P > 0 ? P : U.degree();
+  constexpr int W = (P > 0 ? P : kMaxDegree) + 1;
+  const double a = U.knots()[static_cast<std::size_t>(span)];
+  const double h = U.knots()[static_cast<std::size_t>(span) + 1] - a;
+  const double t = (u - a) / h, s = 1.0 - t;
+  // B[d][i + 2] = B^d_i, with two zeros in front so that the differences below need no bounds tests.
+  double B[W][W + 2] = {};
+  B[0][2] = 1.0;
+  for (int d = 1; d <= p; ++d) {
+    for (int i = 0; i <= d; ++i) B[d][i + 2] = s * B[d - 1][i + 2] + t * B[d - 1][i + 1];
+  }
+  for (int i = 0; i <= p; ++i) ders[i] = B[p][i + 2];
+  if (n >= 1) {
+    const double f = p / h;
+    for (int i = 0; i <= p; ++i) ders[(p + 1) + i] = p >= 1 ? f * (B[p - 1][i + 1] - B[p - 1][i + 2]) : 0.0;
+  }
+  if (n >= 2) {
+    const double f = p * (p - 1) / (h * h);
+    for (int i = 0; i <= p; ++i) {
+      ders[2 * (p + 1) + i] = p >= 2 ? f * (B[p - 2][i] - 2.0 * B[p - 2][i + 1] + B[p - 2][i + 2]) : 0.0;
+    }
+  }
+}
+
+void bernstein_derivatives(const KnotVector& U, int span, double u, int n, double* ders) {
+  switch (U.degree()) {
+    case 1: return bernstein_impl<1>(U, span, u, n, ders);
+    case 2: return bernstein_impl<2>(U, span, u, n, ders);
+    case 3: return bernstein_impl<3>(U, span, u, n, ders);
+    default: return bernstein_impl<0>(U, span, u, n, ders);
+  }
+}
+
+}  // namespace
+
 void basis_function_derivatives(const KnotVector& U, int span, double u, int n, double* ders) {
+  if (n <= 2 && is_bezier_span(U, span)) return bernstein_derivatives(U, span, u, n, ders);
   switch (U.degree()) {
     case 1: return derivatives_impl<1>(U, span, u, n, ders);
     case 2: return derivatives_impl<2>(U, span, u, n, ders);

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "nurbs/normal_cone.hpp"
 #include "nurbs/point_tree.hpp"
 
 namespace probecomp::nurbs {
@@ -48,8 +49,8 @@ double rounding_of_f(const Point3& P, const Iterate& it) {
   return 16.0 * eps * (P.norm() + it.d.S.norm()) * std::sqrt(it.f) + 4.0 * eps * it.f;
 }
 
-Iterate make_iterate(const Surface& s, const Point3& P, double u, double v) {
-  Iterate it{u, v, derivatives_d2(s, u, v), Vector3::Zero(), 0.0};
+Iterate make_iterate(const Surface& s, const Point3& P, double u, double v, KnotSpans spans) {
+  Iterate it{u, v, derivatives_d2(s, u, v, spans), Vector3::Zero(), 0.0};
   it.r = it.d.S - P;
   it.f = it.r.squaredNorm();
   return it;
@@ -97,14 +98,13 @@ std::array<double, 2> newton_step(const Iterate& it, double gu, double gv, Activ
 
 }  // namespace
 
-ClosestPointResult refine_closest_point(const Surface& s, const Point3& P, double u0, double v0, int max_iterations) {
-  return refine_closest_point_in(s, P, u0, v0, s.domain(), max_iterations);
-}
+namespace {
 
-ClosestPointResult refine_closest_point_in(const Surface& s, const Point3& P, double u0, double v0, const Domain& dom,
-                                           int max_iterations) {
+// Projected Newton inside `dom`; `spans` are the knot spans of `dom` when it lies in one (a cell), else -1.
+ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, double v0, const Domain& dom,
+                             int max_iterations, KnotSpans spans) {
   ClosestPointResult result;
-  Iterate it = make_iterate(s, P, std::clamp(u0, dom.u0, dom.u1), std::clamp(v0, dom.v0, dom.v1));
+  Iterate it = make_iterate(s, P, std::clamp(u0, dom.u0, dom.u1), std::clamp(v0, dom.v0, dom.v1), spans);
 
   auto finish = [&](ClosestPointStatus status) {
     result.status = status;
@@ -133,10 +133,22 @@ ClosestPointResult refine_closest_point_in(const Surface& s, const Point3& P, do
 
     ++result.iterations;
     auto [du, dv] = newton_step(it, gu, gv, active);
+    const double predicted = (du * it.d.Su + dv * it.d.Sv).norm();
+    if (predicted < kClosestPointStepTolerance && it.d.Suu.allFinite() && it.d.Suv.allFinite() && it.d.Svv.allFinite()) {
+      // The last, tiny step is taken without the derivatives it would need only to start another: Newton's
+      // error after it is of the order of its square, and the point is evaluated where the step lands.
+      result.status = converged_status;
+      result.u = std::clamp(it.u + du, dom.u0, dom.u1);
+      result.v = std::clamp(it.v + dv, dom.v0, dom.v1);
+      result.point = evaluate(s, result.u, result.v, spans);
+      result.distance = (result.point - P).norm();
+      if (!(result.distance <= dist + kClosestPointStepTolerance)) return finish(converged_status);
+      return result;
+    }
     Iterate next = it;
     bool decreased = false;
     for (int h = 0; h <= kMaxHalvings; ++h) {
-      next = make_iterate(s, P, std::clamp(it.u + du, dom.u0, dom.u1), std::clamp(it.v + dv, dom.v0, dom.v1));
+      next = make_iterate(s, P, std::clamp(it.u + du, dom.u0, dom.u1), std::clamp(it.v + dv, dom.v0, dom.v1), spans);
       if (next.f <= it.f + rounding_of_f(P, it)) {
         decreased = true;
         break;
@@ -161,23 +173,53 @@ ClosestPointResult refine_closest_point_in(const Surface& s, const Point3& P, do
   return finish(ClosestPointStatus::NotConverged);
 }
 
+}  // namespace
+
+ClosestPointResult refine_closest_point(const Surface& s, const Point3& P, double u0, double v0, int max_iterations) {
+  return refine_in(s, P, u0, v0, s.domain(), max_iterations, {});
+}
+
+ClosestPointResult refine_closest_point_in(const Surface& s, const Point3& P, double u0, double v0, const Domain& dom,
+                                           int max_iterations) {
+  return refine_in(s, P, u0, v0, dom, max_iterations, {});
+}
+
 // ---------------------------------------------------------------------------------------------------------
 // Global search
 
 namespace {
 
-// The cells along one parameter direction: `per_span` equal sub-cells in each knot span.
+// The cells along one parameter direction: each knot span cut into its own number of equal sub-cells.
 struct CellAxis {
   std::vector<double> breaks;  // distinct knots
-  int per_span = 1;
+  std::vector<int> first;      // first[s]: the first cell of span s; first.back() = number of cells
+  std::vector<int> span_of;    // the span of each cell
+  std::vector<int> knot_span;  // each span's index in the Bézier-refined knot vector (KnotVector::find_span)
 
-  [[nodiscard]] int count() const { return static_cast<int>(breaks.size() - 1) * per_span; }
-  [[nodiscard]] double lower(int c) const { return at(c / per_span, c % per_span); }
-  [[nodiscard]] double upper(int c) const { return at(c / per_span, c % per_span + 1); }
+  CellAxis() = default;
+  CellAxis(const KnotVector& K, const std::vector<int>& per_span) : breaks(K.breakpoints()), first{0} {
+    for (std::size_t s = 0; s < per_span.size(); ++s) {
+      knot_span.push_back(K.find_span(0.5 * (breaks[s] + breaks[s + 1])));
+      first.push_back(first.back() + per_span[s]);
+      span_of.insert(span_of.end(), static_cast<std::size_t>(per_span[s]), static_cast<int>(s));
+    }
+  }
+  [[nodiscard]] int count() const { return first.back(); }
+  [[nodiscard]] int spans() const { return static_cast<int>(breaks.size()) - 1; }
+  [[nodiscard]] int span(int c) const { return span_of[static_cast<std::size_t>(c)]; }
+  [[nodiscard]] int cells_in(int s) const { return first[s + 1] - first[s]; }
+  // Cell c's part [t0, t1] of its span, as fractions of the span.
+  [[nodiscard]] double t0(int c) const { return static_cast<double>(c - first[span(c)]) / cells_in(span(c)); }
+  [[nodiscard]] double t1(int c) const { return static_cast<double>(c + 1 - first[span(c)]) / cells_in(span(c)); }
+  [[nodiscard]] bool first_in_span(int c) const { return c == first[span(c)]; }
+  [[nodiscard]] bool last_in_span(int c) const { return c + 1 == first[span(c) + 1]; }
+  [[nodiscard]] double lower(int c) const { return at(span(c), c - first[span(c)]); }
+  [[nodiscard]] double upper(int c) const { return at(span(c), c + 1 - first[span(c)]); }
 
  private:
-  [[nodiscard]] double at(int span, int sub) const {
-    return sub == per_span ? breaks[span + 1] : breaks[span] + (breaks[span + 1] - breaks[span]) * sub / per_span;
+  [[nodiscard]] double at(int s, int sub) const {
+    const int per = cells_in(s);
+    return sub == per ? breaks[s + 1] : breaks[s] + (breaks[s + 1] - breaks[s]) * sub / per;
   }
 };
 
@@ -211,6 +253,19 @@ struct CellBox {
     const Eigen::Array3d gap = (lo - x).max(x - hi).max(0.0);
     return std::sqrt(gap.square().sum());
   }
+
+  // Whether the cell can hold a critical point of the distance (q − x parallel to the normal at x), given that
+  // every normal of the cell is within the angle atan(cone_tan) of n: at such a point the component of q − x
+  // across n is at most cone_tan times its component along n, and over the box the first is at least the
+  // tangential gap, the second at most the farther of the box's two faces.
+  [[nodiscard]] bool may_hold_critical_point(const Vector3& q_minus_c, double cone_tan) const {
+    if (!(cone_tan < std::numeric_limits<double>::infinity())) return true;
+    const double x1 = q_minus_c.dot(t1), x2 = q_minus_c.dot(t2), x3 = q_minus_c.dot(n);
+    const double g1 = std::max({lo[0] - x1, x1 - hi[0], 0.0});
+    const double g2 = std::max({lo[1] - x2, x2 - hi[1], 0.0});
+    const double height = std::max(std::abs(x3 - lo[2]), std::abs(x3 - hi[2]));
+    return std::sqrt(g1 * g1 + g2 * g2) <= cone_tan * height + kCellBoundFloor;
+  }
 };
 
 // A Bézier patch in homogeneous form: (p+1)·(q+1) points, row i (u) major, over the parameter box `box`.
@@ -219,37 +274,6 @@ struct BezierPatch {
   Domain box;
   std::vector<HomogeneousPoint> net;
 };
-
-// De Casteljau at the middle of the u range (a = 0) or v range (a = 1): the two halves of the patch.
-std::array<BezierPatch, 2> split(const BezierPatch& b, int direction) {
-  std::array<BezierPatch, 2> halves{b, b};
-  const int rows = b.p + 1;
-  const int cols = b.q + 1;
-  const int deg = direction == 0 ? b.p : b.q;
-  const int lines = direction == 0 ? cols : rows;
-  HomogeneousPoint work[kMaxDegree + 1];
-  for (int line = 0; line < lines; ++line) {
-    auto at = [&](int k) -> int { return direction == 0 ? k * cols + line : line * cols + k; };
-    for (int k = 0; k <= deg; ++k) work[k] = b.net[at(k)];
-    halves[0].net[at(0)] = work[0];
-    halves[1].net[at(deg)] = work[deg];
-    for (int level = 1; level <= deg; ++level) {
-      for (int k = 0; k <= deg - level; ++k) work[k] = 0.5 * (work[k] + work[k + 1]);
-      halves[0].net[at(level)] = work[0];
-      halves[1].net[at(deg - level)] = work[deg - level];
-    }
-  }
-  if (direction == 0) {
-    const double mid = 0.5 * (b.box.u0 + b.box.u1);
-    halves[0].box.u1 = mid;
-    halves[1].box.u0 = mid;
-  } else {
-    const double mid = 0.5 * (b.box.v0 + b.box.v1);
-    halves[0].box.v1 = mid;
-    halves[1].box.v0 = mid;
-  }
-  return halves;
-}
 
 bool closer(const ClosestPointResult& a, const ClosestPointResult& b) {
   if (a.distance != b.distance) return a.distance < b.distance;
@@ -263,12 +287,61 @@ struct ClosestPointSolver::Seeds {
   explicit Seeds(Surface refined) : bezier(std::move(refined)) {}
   CellAxis axis_u, axis_v;
   Surface bezier;  // the surface refined so that knot span (i, j) has control points i·p .. i·p+p by j·q .. j·q+q
-  PointCloud cloud;
-  std::vector<double> u, v, radius;  // radius: largest distance from the seed to its cell's control points
+  std::vector<Point3> seed;         // the surface at each cell's centre
+  std::vector<double> u, v;          // the cell's centre
   std::vector<CellBox> box;
+  // tan of the half-angle of the cell's normal cone about box.n; infinite where a minimum need not be a
+  // critical point (cells on the domain's edges or on a C0 knot line) or no cone below 90° exists.
+  std::vector<double> cone_tan;
   std::vector<char> in_region;  // the cell meets the region (all cells without one)
-  double max_radius = 0.0;
+  std::vector<Eigen::Array3d> aabb_lo, aabb_hi;  // axis-aligned box of each cell's Bézier control points
+  // A bounding-volume hierarchy over the cells, built on the parameter grid: halving the longer of the two index
+  // ranges keeps every node a compact piece of the surface. Node 0 is the root.
+  struct Node {
+    Eigen::Array3d lo, hi;  // axis-aligned box holding the node's cells (their control points)
+    int left = -1, right = -1;  // children, or -1 for a leaf
+    int parent = -1;
+    std::uint32_t cell = 0;     // a leaf's cell
+    bool in_region = true;      // some cell of the node meets the region
+  };
+  std::vector<Node> nodes;
+  std::vector<int> leaf_of;  // each cell's leaf node
+  PointCloud cloud;  // the seeds of the cells in the region
+  std::vector<std::uint32_t> cloud_cell;
   std::unique_ptr<PointTree> tree;
+
+  int build(int i0, int i1, int j0, int j1) {
+    const int at = static_cast<int>(nodes.size());
+    nodes.emplace_back();
+    if (i1 - i0 == 1 && j1 - j0 == 1) {
+      const std::size_t k = static_cast<std::size_t>(i0) * static_cast<std::size_t>(axis_v.count()) + static_cast<std::size_t>(j0);
+      nodes[at].lo = aabb_lo[k];
+      nodes[at].hi = aabb_hi[k];
+      nodes[at].cell = static_cast<std::uint32_t>(k);
+      nodes[at].in_region = in_region[k] != 0;
+      leaf_of[k] = at;
+      return at;
+    }
+    int l, r;
+    if (i1 - i0 >= j1 - j0) {
+      const int mid = (i0 + i1) / 2;
+      l = build(i0, mid, j0, j1);
+      r = build(mid, i1, j0, j1);
+    } else {
+      const int mid = (j0 + j1) / 2;
+      l = build(i0, i1, j0, mid);
+      r = build(i0, i1, mid, j1);
+    }
+    Node& node = nodes[at];
+    node.left = l;
+    node.right = r;
+    node.lo = nodes[l].lo.min(nodes[r].lo);
+    node.hi = nodes[l].hi.max(nodes[r].hi);
+    node.in_region = nodes[l].in_region || nodes[r].in_region;
+    nodes[l].parent = at;
+    nodes[r].parent = at;
+    return at;
+  }
 };
 
 namespace {
@@ -297,22 +370,21 @@ void restrict_bezier(HomogeneousPoint* w, int deg, double t0, double t1) {
 BezierPatch cell_patch(const Surface& bezier, const CellAxis& axis_u, const CellAxis& axis_v, int cu, int cv) {
   const int p = bezier.p();
   const int q = bezier.q();
-  const int su = cu / axis_u.per_span, sv = cv / axis_v.per_span;
+  const int su = axis_u.span(cu), sv = axis_v.span(cv);
   BezierPatch patch{p, q, {axis_u.lower(cu), axis_u.upper(cu), axis_v.lower(cv), axis_v.upper(cv)}, {}};
   patch.net.reserve(static_cast<std::size_t>((p + 1) * (q + 1)));
   for (int a = 0; a <= p; ++a)
     for (int b = 0; b <= q; ++b) patch.net.push_back(bezier.homogeneous(su * p + a, sv * q + b));
-  const double u0 = static_cast<double>(cu % axis_u.per_span) / axis_u.per_span;
-  const double v0 = static_cast<double>(cv % axis_v.per_span) / axis_v.per_span;
+
   HomogeneousPoint work[kMaxDegree + 1];
   for (int b = 0; b <= q; ++b) {
     for (int a = 0; a <= p; ++a) work[a] = patch.net[static_cast<std::size_t>(a * (q + 1) + b)];
-    restrict_bezier(work, p, u0, u0 + 1.0 / axis_u.per_span);
+    restrict_bezier(work, p, axis_u.t0(cu), axis_u.t1(cu));
     for (int a = 0; a <= p; ++a) patch.net[static_cast<std::size_t>(a * (q + 1) + b)] = work[a];
   }
   for (int a = 0; a <= p; ++a) {
     HomogeneousPoint* row = patch.net.data() + a * (q + 1);
-    restrict_bezier(row, q, v0, v0 + 1.0 / axis_v.per_span);
+    restrict_bezier(row, q, axis_v.t0(cv), axis_v.t1(cv));
   }
   return patch;
 }
@@ -326,6 +398,53 @@ std::vector<double> bezier_knots(const KnotVector& U) {
   }
   return X;
 }
+
+// Each knot span's length on the part along `direction` (0: u, 1: v): the longest control polygon of the
+// surface's Bézier nets across that direction (it bounds the curves' lengths).
+std::vector<double> span_lengths(const Surface& bezier, int direction) {
+  const int p = bezier.p(), q = bezier.q();
+  const int spans = direction == 0 ? (bezier.num_u() - 1) / p : (bezier.num_v() - 1) / q;
+  const int deg = direction == 0 ? p : q;
+  const int across = direction == 0 ? bezier.num_v() : bezier.num_u();
+  std::vector<double> length(static_cast<std::size_t>(spans), 0.0);
+  for (int s = 0; s < spans; ++s) {
+    for (int line = 0; line < across; ++line) {
+      double l = 0.0;
+      for (int a = 0; a < deg; ++a) {
+        const int k = s * deg + a;
+        l += direction == 0 ? (bezier.control_point(k + 1, line) - bezier.control_point(k, line)).norm()
+                            : (bezier.control_point(line, k + 1) - bezier.control_point(line, k)).norm();
+      }
+      length[static_cast<std::size_t>(s)] = std::max(length[static_cast<std::size_t>(s)], l);
+    }
+  }
+  return length;
+}
+
+// Cells per span, at least `min_cells` each, proportional to the spans' lengths, about `mean` per span in all:
+// the largest cell length h with Σ max(min_cells, ⌈L_s / h⌉) ≤ mean · spans (bisection; the sum falls as h grows).
+std::vector<int> share_cells(const std::vector<double>& length, int mean, int min_cells) {
+  const double budget = static_cast<double>(mean) * static_cast<double>(length.size());
+  auto cells = [&](double h, std::vector<int>* out) {
+    double total = 0.0;
+    for (std::size_t s = 0; s < length.size(); ++s) {
+      const double c = std::max(static_cast<double>(min_cells), std::ceil(length[s] / h));
+      total += c;
+      if (out != nullptr) (*out)[s] = static_cast<int>(c);
+    }
+    return total;
+  };
+  const double longest = *std::max_element(length.begin(), length.end());
+  std::vector<int> per_span(length.size(), std::max(mean, min_cells));
+  if (!(longest > 0.0) || !std::isfinite(longest)) return per_span;
+  double lo = longest / (4.0 * budget), hi = longest;  // at lo the sum exceeds the budget; at hi it is minimal
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (cells(mid, nullptr) > budget ? lo : hi) = mid;
+  }
+  cells(hi, &per_span);
+  return per_span;
+}
 }  // namespace
 
 ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions options, const ParameterRegion* region)
@@ -334,28 +453,58 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
   Seeds& sd = *seeds_;
   const int p = surface_.p();
   const int q = surface_.q();
+  sd.bezier =
+      refine_knots_v(refine_knots_u(surface_, bezier_knots(surface_.U())), bezier_knots(surface_.V()));
+  const int spans_u = surface_.U().num_spans();
+  const int spans_v = surface_.V().num_spans();
   int per_u = options_.seeds_per_span > 0 ? options_.seeds_per_span : 2 * (p + 1);
   int per_v = options_.seeds_per_span > 0 ? options_.seeds_per_span : 2 * (q + 1);
-  const double spans = static_cast<double>(surface_.U().num_spans()) * surface_.V().num_spans();
+  const double spans = static_cast<double>(spans_u) * spans_v;
   if (options_.seeds_per_span == 0 && spans * per_u * per_v > options_.max_cells) {
     const int per = std::max(2, static_cast<int>(std::sqrt(options_.max_cells / spans)));
     per_u = std::min(per_u, per);
     per_v = std::min(per_v, per);
   }
-  sd.axis_u = {surface_.U().breakpoints(), per_u};
-  sd.axis_v = {surface_.V().breakpoints(), per_v};
+  if (options_.seeds_per_span > 0) {
+    sd.axis_u = CellAxis(sd.bezier.U(), std::vector<int>(static_cast<std::size_t>(spans_u), per_u));
+    sd.axis_v = CellAxis(sd.bezier.V(), std::vector<int>(static_cast<std::size_t>(spans_v), per_v));
+  } else {
+    // The same number of cells per direction, shared out by the spans' lengths on the part: knot spans of very
+    // different sizes (random or refined knots) get cells of similar size, so no cell is large enough to hold
+    // two minima while tiny spans waste none.
+    sd.axis_u = CellAxis(sd.bezier.U(), share_cells(span_lengths(sd.bezier, 0), per_u, 2));
+    sd.axis_v = CellAxis(sd.bezier.V(), share_cells(span_lengths(sd.bezier, 1), per_v, 2));
+  }
   const int nu = sd.axis_u.count();
   const int nv = sd.axis_v.count();
-  sd.bezier =
-      refine_knots_v(refine_knots_u(surface_, bezier_knots(surface_.U())), bezier_knots(surface_.V()));
 
   const std::size_t n = static_cast<std::size_t>(nu) * nv;
-  sd.cloud.points.resize(n);
+  sd.seed.resize(n);
+  sd.aabb_lo.resize(n);
+  sd.aabb_hi.resize(n);
   sd.u.resize(n);
   sd.v.resize(n);
-  sd.radius.resize(n);
   sd.box.resize(n);
+  sd.cone_tan.resize(n);
   sd.in_region.assign(n, 1);
+
+  // The normal polynomial of each knot span (see normal_cone.hpp), cut down to each cell below.
+  std::vector<BernsteinVectorPatch> span_normals(static_cast<std::size_t>(spans_u) * spans_v);
+  tbb::parallel_for(0, spans_u, [&](int su) {
+    std::vector<HomogeneousPoint> net;
+    for (int sv = 0; sv < spans_v; ++sv) {
+      net.clear();
+      for (int a = 0; a <= p; ++a)
+        for (int b = 0; b <= q; ++b) net.push_back(sd.bezier.homogeneous(su * p + a, sv * q + b));
+      span_normals[static_cast<std::size_t>(su) * spans_v + sv] = normal_polynomial(p, q, net);
+    }
+  });
+  // A minimum on the domain's edge or on a knot line where the surface is only C0 (multiplicity ≥ degree) need
+  // not be a critical point: cells touching one are never culled by their normal cone.
+  auto edge_or_crease = [](const CellAxis& axis, const KnotVector& K, int c) {
+    auto crease = [&](int b) { return b == 0 || b == axis.spans() || K.multiplicity(axis.breaks[b]) >= K.degree(); };
+    return (axis.first_in_span(c) && crease(axis.span(c))) || (axis.last_in_span(c) && crease(axis.span(c) + 1));
+  };
   tbb::parallel_for(0, nu, [&](int i) {
     for (int j = 0; j < nv; ++j) {
       const std::size_t k = static_cast<std::size_t>(i) * nv + j;
@@ -376,17 +525,34 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
       }
       const BezierPatch patch = cell_patch(sd.bezier, sd.axis_u, sd.axis_v, i, j);
       box.enclose(d.S, patch.net);
-      double r = 0.0;
-      for (const HomogeneousPoint& P : patch.net) r = std::max(r, (P.head<3>() / P.w() - d.S).norm());
+      sd.cone_tan[k] = std::numeric_limits<double>::infinity();
+      if (!edge_or_crease(sd.axis_u, surface_.U(), i) && !edge_or_crease(sd.axis_v, surface_.V(), j)) {
+        const BernsteinVectorPatch N =
+            restrict_patch(span_normals[static_cast<std::size_t>(sd.axis_u.span(i)) * spans_v + sd.axis_v.span(j)],
+                           sd.axis_u.t0(i), sd.axis_u.t1(i), sd.axis_v.t0(j), sd.axis_v.t1(j));
+        const double c = normal_cone_cosine(N, box.n);
+        if (c > 0.0) sd.cone_tan[k] = std::sqrt(std::max(0.0, 1.0 - c * c)) / c;
+      }
+      sd.aabb_lo[k] = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
+      sd.aabb_hi[k] = -sd.aabb_lo[k];
+      for (const HomogeneousPoint& P : patch.net) {
+        const Eigen::Array3d x = (P.head<3>() / P.w()).array();
+        sd.aabb_lo[k] = sd.aabb_lo[k].min(x);
+        sd.aabb_hi[k] = sd.aabb_hi[k].max(x);
+      }
+      sd.aabb_lo[k] -= kCellBoundFloor;
+      sd.aabb_hi[k] += kCellBoundFloor;
       if (region_ != nullptr) sd.in_region[k] = region_->meets(patch.box) ? 1 : 0;
-      sd.cloud.points[k] = d.S;
-      sd.radius[k] = r + kCellBoundFloor;
+      sd.seed[k] = d.S;
     }
   });
-  // Only cells that can be searched widen the seed query: a small face trimmed from a large surface keeps a
-  // small reach.
+  sd.nodes.reserve(2 * n);
+  sd.leaf_of.resize(n);
+  sd.build(0, nu, 0, nv);
   for (std::size_t k = 0; k < n; ++k) {
-    if (sd.in_region[k]) sd.max_radius = std::max(sd.max_radius, sd.radius[k]);
+    if (!sd.in_region[k]) continue;
+    sd.cloud.points.push_back(sd.seed[k]);
+    sd.cloud_cell.push_back(static_cast<std::uint32_t>(k));
   }
   sd.tree = std::make_unique<PointTree>(3, sd.cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   sd.tree->buildIndex();
@@ -396,90 +562,24 @@ ClosestPointSolver::~ClosestPointSolver() = default;
 ClosestPointSolver::ClosestPointSolver(ClosestPointSolver&&) noexcept = default;
 ClosestPointSolver& ClosestPointSolver::operator=(ClosestPointSolver&&) noexcept = default;
 
-std::size_t ClosestPointSolver::seed_count() const { return seeds_->cloud.points.size(); }
+std::size_t ClosestPointSolver::seed_count() const { return seeds_->seed.size(); }
 
 std::vector<Point3> ClosestPointSolver::seed_points_in_region() const {
   const Seeds& sd = *seeds_;
   std::vector<Point3> out;
-  for (std::size_t k = 0; k < sd.cloud.points.size(); ++k) {
-    if (region_ == nullptr || (sd.in_region[k] && region_->contains(sd.u[k], sd.v[k]))) out.push_back(sd.cloud.points[k]);
+  for (std::size_t k = 0; k < sd.seed.size(); ++k) {
+    if (region_ == nullptr || (sd.in_region[k] && region_->contains(sd.u[k], sd.v[k]))) out.push_back(sd.seed[k]);
   }
   return out;
 }
 
 namespace {
 
-// How often a cell may be split in four when Newton inside it stops on one of its inner edges while its
-// bound still allows a closer point: such a cell may hold a second minimum (e.g. beside a C0 crease).
-constexpr int kMaxSubdivisionDepth = 3;
-static_assert(kMaxSubdivisionDepth > 0, "a seed cell whose Newton stops on an inner edge is always split once");
-
-struct CellSearch {
-  const Surface& surface;
-  const Point3& query;
-  const CellBox& frame;  // the seed cell's frame, reused for its sub-cells' boxes
-  const Point3& origin;
-  const ParameterRegion* region;
-  int max_iterations;
-  ClosestPointResult& best;
-  int iterations = 0;
-  int starts = 0;
-
-  // Newton inside `box`; the point it finds, followed beyond the box's edge if it stops there and is the best
-  // so far. Returns whether it stopped on an inner edge (so the box may hold another, closer minimum).
-  bool run(const Domain& box) {
-    const Domain whole = surface.domain();
-    ClosestPointResult r = refine_closest_point_in(surface, query, 0.5 * (box.u0 + box.u1), 0.5 * (box.v0 + box.v1),
-                                                   box, max_iterations);
-    ++starts;
-    iterations += r.iterations;
-    const bool on_inner_edge = r.status == ClosestPointStatus::OnBoundary &&
-                               ((r.u == box.u0 && r.u != whole.u0) || (r.u == box.u1 && r.u != whole.u1) ||
-                                (r.v == box.v0 && r.v != whole.v0) || (r.v == box.v1 && r.v != whole.v1));
-    if (r.status == ClosestPointStatus::OnBoundary && !on_inner_edge) {
-      const bool on_domain_edge = r.u == whole.u0 || r.u == whole.u1 || r.v == whole.v0 || r.v == whole.v1;
-      r.status = on_domain_edge ? ClosestPointStatus::OnBoundary : ClosestPointStatus::Converged;
-    }
-    // Outside the region (a trimmed face) the point does not count, and the cell is not split for it: the
-    // region's own boundary, searched by the caller, holds the minimum of the cell's part inside the region
-    // unless that part has an interior minimum of its own which Newton did not reach (accepted, rare).
-    if (region != nullptr && !region->contains(r.u, r.v)) return false;
-    if (on_inner_edge && closer(r, best)) {
-      // The minimum lies beyond the edge: follow it (f only decreases on the way).
-      ClosestPointResult polished = refine_closest_point(surface, query, r.u, r.v, max_iterations);
-      iterations += polished.iterations;
-      const bool polished_ok = polished.status == ClosestPointStatus::Converged ||
-                               polished.status == ClosestPointStatus::OnBoundary;
-      if (polished_ok && (region == nullptr || region->contains(polished.u, polished.v))) {
-        r = polished;
-      } else if (!polished_ok) {
-        // Newton cannot settle across the edge: the surface is only C0 there (a crease along a knot line, e.g.
-        // a knot of full multiplicity) and the box's minimum on it is the minimum of both sides. The
-        // neighbouring cell is searched in its own right, so a closer point beyond would still be found.
-        r.status = ClosestPointStatus::Converged;
-      }
-    }
-    if (closer(r, best)) best = r;
-    return on_inner_edge;
-  }
-
-  // Branch and bound: a box whose Newton stopped on an inner edge may hold another minimum; split it while
-  // the boxes of its parts are nearer than the best point.
-  void search(const BezierPatch& patch, int depth) {
-    if (run(patch.box) && depth < kMaxSubdivisionDepth) search_parts(patch, depth);
-  }
-
-  void search_parts(const BezierPatch& patch, int depth) {
-    for (const BezierPatch& half : split(patch, 0)) {
-      for (const BezierPatch& quarter : split(half, 1)) {
-        if (region != nullptr && !region->meets(quarter.box)) continue;
-        CellBox sub = frame;
-        sub.enclose(origin, quarter.net);
-        if (sub.lower_bound(query - origin) < best.distance) search(quarter, depth + 1);
-      }
-    }
-  }
-};
+// Squared distance from q to an axis-aligned box: a lower bound on the distance to anything inside it.
+inline double box_distance_sq(const Point3& q, const Eigen::Array3d& lo, const Eigen::Array3d& hi) {
+  const Eigen::Array3d x = q.array();
+  return (lo - x).max(x - hi).max(0.0).square().sum();
+}
 
 }  // namespace
 
@@ -489,17 +589,41 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, Close
   const int nv = sd.axis_v.count();
   const int cu = static_cast<int>(k) / nv;
   const int cv = static_cast<int>(k) % nv;
-  // Newton inside the cell finds the cell's own minimum; unconstrained, it could run across a knot where the
-  // surface is only C0 or C1 into a neighbour's basin and miss a closer point here.
-  // The cell's Bézier net is gathered only when the cell has to be split, which is rare.
-  CellSearch search{surface_, query, sd.box[k], sd.cloud.points[k], region_, options_.max_iterations, best};
   const Domain cell{sd.axis_u.lower(cu), sd.axis_u.upper(cu), sd.axis_v.lower(cv), sd.axis_v.upper(cv)};
-  // Newton may have found a closer point beyond the cell's edge, which can put the whole cell out of reach.
-  if (search.run(cell) && sd.box[k].lower_bound(query - sd.cloud.points[k]) < best.distance) {
-    search.search_parts(cell_patch(sd.bezier, sd.axis_u, sd.axis_v, cu, cv), 0);
+  const Domain whole = surface_.domain();
+  // Newton kept inside the cell finds the cell's own minimum; unconstrained, it could run across a knot where the
+  // surface is only C0 or C1 into a neighbour's basin and miss a closer point here. It runs on the Bézier form,
+  // in the cell's known span: cheaper to evaluate.
+  const KnotSpans spans{sd.axis_u.knot_span[static_cast<std::size_t>(sd.axis_u.span(cu))],
+                        sd.axis_v.knot_span[static_cast<std::size_t>(sd.axis_v.span(cv))]};
+  ClosestPointResult r = refine_in(sd.bezier, query, sd.u[k], sd.v[k], cell, options_.max_iterations, spans);
+  ++starts;
+  iterations += r.iterations;
+  const bool on_inner_edge = r.status == ClosestPointStatus::OnBoundary &&
+                             ((r.u == cell.u0 && r.u != whole.u0) || (r.u == cell.u1 && r.u != whole.u1) ||
+                              (r.v == cell.v0 && r.v != whole.v0) || (r.v == cell.v1 && r.v != whole.v1));
+  if (r.status == ClosestPointStatus::OnBoundary && !on_inner_edge) {
+    const bool on_domain_edge = r.u == whole.u0 || r.u == whole.u1 || r.v == whole.v0 || r.v == whole.v1;
+    r.status = on_domain_edge ? ClosestPointStatus::OnBoundary : ClosestPointStatus::Converged;
   }
-  iterations += search.iterations;
-  starts += search.starts;
+  // Outside the region (a trimmed face) the point does not count: the region's own boundary, searched by the
+  // caller, holds the minimum of the cell's part inside the region unless that part has an interior minimum of
+  // its own which Newton did not reach (accepted, rare).
+  if (region_ != nullptr && !region_->contains(r.u, r.v)) return;
+  if (on_inner_edge && closer(r, best)) {
+    // The minimum lies beyond the edge: follow it (f only decreases on the way).
+    const ClosestPointResult polished = refine_closest_point(surface_, query, r.u, r.v, options_.max_iterations);
+    iterations += polished.iterations;
+    if (polished.ok() && (region_ == nullptr || region_->contains(polished.u, polished.v))) {
+      r = polished;
+    } else if (!polished.ok()) {
+      // Newton cannot settle across the edge: the surface is only C0 there (a crease along a knot line, e.g.
+      // a knot of full multiplicity) and the cell's minimum on it is the minimum of both sides. The
+      // neighbouring cell is searched in its own right, so a closer point beyond would still be found.
+      r.status = ClosestPointStatus::Converged;
+    }
+  }
+  if (closer(r, best)) best = r;
 }
 
 ClosestPointResult ClosestPointSolver::closest_point(const Point3& query) const {
@@ -513,42 +637,77 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
     bad.status = ClosestPointStatus::NumericalError;
     return bad;
   }
-  const double q[3] = {query.x(), query.y(), query.z()};
   ClosestPointResult best = bound;
   int iterations = 0;
   int starts = 0;
 
-  // Without a bound, Newton first runs in the nearest seed's cell so that the ball searched below is small.
-  // With one (the best point on other faces, or a trimmed face's boundary), the ball is already known and
-  // the nearest candidate comes first anyway.
-  double seed_bound = std::numeric_limits<double>::infinity();
-  std::uint32_t nearest = std::numeric_limits<std::uint32_t>::max();
-  if (!std::isfinite(best.distance)) {
-    double nearest_dist_sq = 0.0;  // squared (nanoflann)
+  // Without a bound, the cell of the nearest seed (k-d tree; squared distance) is searched first, whatever its
+  // tests: its point bounds the rest. Then depth first over the cell hierarchy, nearer child first, into every
+  // node whose box is nearer than the best point; a cell is searched if its oriented box is nearer too and its
+  // normals allow a critical point there (or it lies on an edge or a crease). The order depends on the query alone.
+  std::uint32_t first = std::numeric_limits<std::uint32_t>::max();
+  if (!std::isfinite(best.distance) && sd.nodes[0].in_region) {
+    const double q[3] = {query.x(), query.y(), query.z()};
+    double nearest_dist_sq = 0.0;
+    std::uint32_t nearest = 0;
     nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(1);
     knn.init(&nearest, &nearest_dist_sq);
     sd.tree->findNeighbors(knn, q, nanoflann::SearchParams());
-    if (sd.in_region[nearest] && sd.box[nearest].lower_bound(query - sd.cloud.points[nearest]) < best.distance) {
-      search_cell(query, nearest, best, iterations, starts);
-    }
-    // The nearest seed bounds the distance only when it lies on the searched surface (no region).
-    if (region_ == nullptr) seed_bound = std::sqrt(nearest_dist_sq);
+    first = sd.cloud_cell[nearest];
+    search_cell(query, first, best, iterations, starts);
   }
-
-  // Every cell that could hold a closer point has its seed within best.distance + its radius: search that
-  // ball, then visit each cell once unless its bounding box is already farther than the best point.
-  const double reach = std::min(best.distance, seed_bound) + sd.max_radius;
-  thread_local std::vector<std::pair<std::uint32_t, double>> candidates;  // (seed, squared distance)
-  nanoflann::RadiusResultSet<double, std::uint32_t> within(reach * reach, candidates);
-  sd.tree->findNeighbors(within, q, nanoflann::SearchParams());
-  std::sort(candidates.begin(), candidates.end(),
-            [](const auto& a, const auto& b) { return a.second < b.second || (a.second == b.second && a.first < b.first); });
-
-  for (const auto& [k, dist_sq] : candidates) {
-    if (k == nearest || !sd.in_region[k]) continue;
-    if (std::sqrt(dist_sq) - sd.radius[k] >= best.distance) continue;
-    if (sd.box[k].lower_bound(query - sd.cloud.points[k]) >= best.distance) continue;
-    search_cell(query, k, best, iterations, starts);
+  // Squared distances from here on: the boxes' lower bounds against best.distance².
+  using Entry = std::pair<double, int>;  // (squared lower bound, node)
+  thread_local std::vector<Entry> stack;
+  stack.clear();
+  auto push_if_nearer = [&](int at) {
+    const Seeds::Node& node = sd.nodes[static_cast<std::size_t>(at)];
+    if (!node.in_region) return;
+    const double d = box_distance_sq(query, node.lo, node.hi);
+    if (d < best.distance * best.distance) stack.emplace_back(d, at);
+  };
+  // Depth first below every node on the stack, nearer child first.
+  auto descend = [&] {
+    while (!stack.empty()) {
+      const auto [lower_sq, at] = stack.back();
+      stack.pop_back();
+      if (lower_sq >= best.distance * best.distance) continue;
+      const Seeds::Node& node = sd.nodes[static_cast<std::size_t>(at)];
+      if (node.left < 0) {
+        const std::uint32_t k = node.cell;
+        const Vector3 q_minus_c = query - sd.seed[k];
+        if (sd.box[k].lower_bound(q_minus_c) >= best.distance) continue;
+        if (!sd.box[k].may_hold_critical_point(q_minus_c, sd.cone_tan[k])) continue;
+          search_cell(query, k, best, iterations, starts);
+        continue;
+      }
+      const Seeds::Node& l = sd.nodes[static_cast<std::size_t>(node.left)];
+      const Seeds::Node& r = sd.nodes[static_cast<std::size_t>(node.right)];
+      constexpr double kNever = std::numeric_limits<double>::infinity();
+      const double dl = l.in_region ? box_distance_sq(query, l.lo, l.hi) : kNever;
+      const double dr = r.in_region ? box_distance_sq(query, r.lo, r.hi) : kNever;
+      const double bound_sq = best.distance * best.distance;
+      if (dl <= dr) {
+        if (dr < bound_sq) stack.emplace_back(dr, node.right);
+        if (dl < bound_sq) stack.emplace_back(dl, node.left);
+      } else {
+        if (dl < bound_sq) stack.emplace_back(dl, node.left);
+        if (dr < bound_sq) stack.emplace_back(dr, node.right);
+      }
+    }
+  };
+  if (first != std::numeric_limits<std::uint32_t>::max()) {
+    // Up from the first cell's leaf: the rest of the hierarchy is the siblings of the nodes on the way, nearest
+    // first; this skips the boxes of the nodes that hold the first cell, which a search from the root would test.
+    for (int at = sd.leaf_of[first]; sd.nodes[static_cast<std::size_t>(at)].parent >= 0;
+         at = sd.nodes[static_cast<std::size_t>(at)].parent) {
+      const Seeds::Node& parent = sd.nodes[static_cast<std::size_t>(sd.nodes[static_cast<std::size_t>(at)].parent)];
+      push_if_nearer(parent.left == at ? parent.right : parent.left);
+      descend();
+    }
+  } else {
+    push_if_nearer(0);
+    descend();
   }
   best.iterations = iterations;
   best.starts = starts;

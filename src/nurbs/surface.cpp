@@ -53,14 +53,15 @@ namespace {
 // Summing each row of the net over v first and then the rows over u costs (p+1)(q+1)(D+1) + (p+1)·#(k,l)
 // four-vector operations instead of (p+1)(q+1)·#(k,l).
 template <int D>
-void homogeneous_derivatives(const Surface& s, double u, double v, HomogeneousPoint (&A)[D + 1][D + 1]) {
+void homogeneous_derivatives(const Surface& s, double u, double v, HomogeneousPoint (&A)[D + 1][D + 1],
+                             KnotSpans spans = {}) {
   const int p = s.p();
   const int q = s.q();
   const Domain dom = s.domain();
   u = std::clamp(u, dom.u0, dom.u1);
   v = std::clamp(v, dom.v0, dom.v1);
-  const int su = s.U().find_span(u);
-  const int sv = s.V().find_span(v);
+  const int su = spans.u >= 0 ? spans.u : s.U().find_span(u);
+  const int sv = spans.v >= 0 ? spans.v : s.V().find_span(v);
   double Nu[(D + 1) * (kMaxDegree + 1)];
   double Nv[(D + 1) * (kMaxDegree + 1)];
   if constexpr (D == 0) {
@@ -113,9 +114,9 @@ SurfaceD2 rational_derivatives(const HomogeneousPoint (&A)[3][3], int order) {
 
 }  // namespace
 
-Point3 evaluate(const Surface& s, double u, double v) {
+Point3 evaluate(const Surface& s, double u, double v, KnotSpans spans) {
   HomogeneousPoint A[1][1];
-  homogeneous_derivatives<0>(s, u, v, A);
+  homogeneous_derivatives<0>(s, u, v, A, spans);
   return A[0][0].head<3>() / A[0][0].w();
 }
 
@@ -130,9 +131,9 @@ SurfaceD1 derivatives_d1(const Surface& s, double u, double v) {
   return r;
 }
 
-SurfaceD2 derivatives_d2(const Surface& s, double u, double v) {
+SurfaceD2 derivatives_d2(const Surface& s, double u, double v, KnotSpans spans) {
   HomogeneousPoint A[3][3];
-  homogeneous_derivatives<2>(s, u, v, A);
+  homogeneous_derivatives<2>(s, u, v, A, spans);
   return rational_derivatives(A, 2);
 }
 

@@ -53,11 +53,18 @@ struct SurfaceD2 {
   Vector3 Su, Sv, Suu, Suv, Svv;
 };
 
+// Knot span indices (KnotVector::find_span) of a parameter pair, known in advance by a caller that works inside
+// one span (the closest-point search in a cell): the evaluators then skip the span search. The parameters must lie
+// in the closed spans; at a span's end the one-sided derivatives of that span are returned. -1: search.
+struct KnotSpans {
+  int u = -1, v = -1;
+};
+
 // Parameters outside the domain are clamped to it.
-[[nodiscard]] Point3 evaluate(const Surface& s, double u, double v);
+[[nodiscard]] Point3 evaluate(const Surface& s, double u, double v, KnotSpans spans = {});
 [[nodiscard]] SurfaceD1 derivatives_d1(const Surface& s, double u, double v);
 // A3.6 on the homogeneous net, then A4.4 for the rational derivatives (including the mixed S_uv).
-[[nodiscard]] SurfaceD2 derivatives_d2(const Surface& s, double u, double v);
+[[nodiscard]] SurfaceD2 derivatives_d2(const Surface& s, double u, double v, KnotSpans spans = {});
 
 // derivatives_d2 on a grid, row by row, to the same formulas: for a fixed u, at every v of `tv`. The tensor
 // product is summed in A3.6's two stages, so the u basis and the partial sums over i are made once per row, not

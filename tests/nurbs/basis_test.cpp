@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 namespace probecomp::nurbs {
@@ -63,6 +64,29 @@ TEST(Basis, DerivativesMatchCentralDifferencesAndTheValues) {
       sum1 += ders[4 + j];
     }
     EXPECT_NEAR(sum1, 0.0, 1e-12);  // derivative of a partition of unity
+  }
+}
+
+// On a Bézier span (p equal knots at each end) the basis functions are the Bernstein polynomials of
+// t = (u − a)/h; their derivatives, written out by hand for the cubic, are an independent reference for the
+// Bernstein fast path.
+TEST(Basis, OnABezierSpanTheDerivativesAreTheCubicBernsteinOnes) {
+  const KnotVector U({0, 0, 0, 0, 0.3, 0.3, 0.3, 1, 1, 1, 1}, 3);
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> dist(0.0, 1.0);
+  for (int trial = 0; trial < 300; ++trial) {
+    const double u = dist(rng);
+    const int span = U.find_span(u);
+    const double a = U[span], h = U[span + 1] - U[span];
+    const double t = (u - a) / h, s = 1.0 - t;
+    const double B[3][4] = {{s * s * s, 3 * t * s * s, 3 * t * t * s, t * t * t},
+                            {-3 * s * s / h, (3 * s * s - 6 * t * s) / h, (6 * t * s - 3 * t * t) / h, 3 * t * t / h},
+                            {6 * s / (h * h), (18 * t - 12) / (h * h), (6 - 18 * t) / (h * h), 6 * t / (h * h)}};
+    double ders[3 * (kMaxDegree + 1)];
+    basis_function_derivatives(U, span, u, 2, ders);
+    for (int k = 0; k <= 2; ++k)
+      for (int j = 0; j <= 3; ++j) EXPECT_NEAR(ders[k * 4 + j], B[k][j], 1e-12 * std::pow(1.0 / h, k)) << k << " " << j;
+    for (int j = 0; j <= 3; ++j) EXPECT_NEAR(ders[j], cox_de_boor(U, span - 3 + j, 3, u), 1e-14);
   }
 }
 

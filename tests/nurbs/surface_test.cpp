@@ -51,6 +51,23 @@ TEST(Surface, SecondDerivativesMatchCentralDifferences) {
   }
 }
 
+// A caller that knows the knot spans (the closest-point search inside a cell) gets what the span search gives.
+TEST(Surface, KnownKnotSpansGiveTheSameDerivatives) {
+  const Surface s = random_rational_surface(31, {.p = 3, .q = 2, .nu = 9, .nv = 7});
+  std::mt19937_64 rng(2);
+  std::uniform_real_distribution<double> t(0.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    const double u = t(rng), v = t(rng);
+    const KnotSpans spans{s.U().find_span(u), s.V().find_span(v)};
+    const SurfaceD2 a = derivatives_d2(s, u, v), b = derivatives_d2(s, u, v, spans);
+    EXPECT_EQ(a.S, b.S);
+    EXPECT_EQ(a.Su, b.Su);
+    EXPECT_EQ(a.Suv, b.Suv);
+    EXPECT_EQ(a.Svv, b.Svv);
+    EXPECT_EQ(evaluate(s, u, v), evaluate(s, u, v, spans));
+  }
+}
+
 TEST(Surface, KnotInsertionInUAndVLeavesTheShapeUnchanged) {
   const Surface s = random_rational_surface(7);
   Surface r = insert_knot_u(s, 0.37);

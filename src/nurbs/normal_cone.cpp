@@ -1,0 +1,123 @@
+#include "nurbs/normal_cone.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+namespace probecomp::nurbs {
+
+namespace {
+
+// A scalar polynomial in bivariate Bernstein form, as BernsteinVectorPatch.
+struct ScalarPatch {
+  int du = 0, dv = 0;
+  std::vector<double> c;
+  [[nodiscard]] double at(int i, int j) const { return c[static_cast<std::size_t>(i * (dv + 1) + j)]; }
+};
+
+double binomial(int n, int k) {
+  double b = 1.0;
+  for (int i = 1; i <= k; ++i) b = b * (n - k + i) / i;
+  return b;
+}
+
+// The product of two Bernstein polynomials of degrees (m1, n1) and (m2, n2) (Farouki & Rajan 1988):
+// h_rs = Σ_{i+k=r, j+l=s} C(m1,i) C(m2,k) C(n1,j) C(n2,l) / (C(m1+m2,r) C(n1+n2,s)) · f_ij g_kl.
+template <class F, class G, class Op, class T>
+void accumulate_product(const F& f, const G& g, Op op, std::vector<T>& h) {
+  const int m = f.du + g.du, n = f.dv + g.dv;
+  for (int i = 0; i <= f.du; ++i)
+    for (int j = 0; j <= f.dv; ++j)
+      for (int k = 0; k <= g.du; ++k)
+        for (int l = 0; l <= g.dv; ++l) {
+          const double scale = binomial(f.du, i) * binomial(g.du, k) * binomial(f.dv, j) * binomial(g.dv, l) /
+                               (binomial(m, i + k) * binomial(n, j + l));
+          h[static_cast<std::size_t>((i + k) * (n + 1) + (j + l))] +=
+              scale * op(f.c[static_cast<std::size_t>(i * (f.dv + 1) + j)], g.c[static_cast<std::size_t>(k * (g.dv + 1) + l)]);
+        }
+}
+
+struct VectorPatch {
+  int du = 0, dv = 0;
+  std::vector<Vector3> c;
+};
+
+// The u or v derivative's Bernstein coefficients, without the positive factor (degree): every term of N holds
+// exactly one u and one v derivative, so the factors p·q are common to all of N and drop out of its direction.
+template <class P>
+P difference(const P& f, int direction) {
+  P d;
+  d.du = f.du - (direction == 0);
+  d.dv = f.dv - (direction == 1);
+  d.c.resize(static_cast<std::size_t>((d.du + 1) * (d.dv + 1)));
+  for (int i = 0; i <= d.du; ++i)
+    for (int j = 0; j <= d.dv; ++j) {
+      const auto hi = f.c[static_cast<std::size_t>((i + (direction == 0)) * (f.dv + 1) + j + (direction == 1))];
+      const auto lo = f.c[static_cast<std::size_t>(i * (f.dv + 1) + j)];
+      d.c[static_cast<std::size_t>(i * (d.dv + 1) + j)] = hi - lo;
+    }
+  return d;
+}
+
+// N += s · (a × b) for scalar s and vector polynomials a, b, all raised to N's degree through the products.
+void add_scaled_cross(const ScalarPatch& s, const VectorPatch& a, const VectorPatch& b, BernsteinVectorPatch& N) {
+  VectorPatch ab{a.du + b.du, a.dv + b.dv, {}};
+  ab.c.assign(static_cast<std::size_t>((ab.du + 1) * (ab.dv + 1)), Vector3::Zero());
+  accumulate_product(a, b, [](const Vector3& x, const Vector3& y) -> Vector3 { return x.cross(y); }, ab.c);
+  assert(s.du + ab.du == N.du && s.dv + ab.dv == N.dv);
+  accumulate_product(s, ab, [](double x, const Vector3& y) -> Vector3 { return x * y; }, N.c);
+}
+
+// De Casteljau restriction of one Bernstein line of degree `deg` (stride apart) to [t0, t1] ⊂ [0, 1].
+void restrict_line(Vector3* w, int deg, std::size_t stride, double t0, double t1) {
+  auto at = [&](int k) -> Vector3& { return w[static_cast<std::size_t>(k) * stride]; };
+  if (t0 > 0.0) {
+    for (int level = 1; level <= deg; ++level)
+      for (int k = 0; k <= deg - level; ++k) at(k) = (1.0 - t0) * at(k) + t0 * at(k + 1);
+  }
+  const double s = t0 < 1.0 ? (t1 - t0) / (1.0 - t0) : 1.0;
+  if (s < 1.0) {
+    for (int level = 1; level <= deg; ++level)
+      for (int k = deg; k >= level; --k) at(k) = (1.0 - s) * at(k - 1) + s * at(k);
+  }
+}
+
+}  // namespace
+
+BernsteinVectorPatch normal_polynomial(int p, int q, std::span<const HomogeneousPoint> net) {
+  assert(p >= 1 && q >= 1 && net.size() == static_cast<std::size_t>((p + 1) * (q + 1)));
+  VectorPatch A{p, q, {}};
+  ScalarPatch W{p, q, {}};
+  for (const HomogeneousPoint& P : net) {
+    A.c.push_back(P.head<3>());
+    W.c.push_back(P.w());
+  }
+  const VectorPatch Au = difference(A, 0), Av = difference(A, 1);
+  const ScalarPatch Wu = difference(W, 0), Wv = difference(W, 1);
+  BernsteinVectorPatch N{3 * p - 1, 3 * q - 1, {}};
+  N.c.assign(static_cast<std::size_t>(3 * p * 3 * q), Vector3::Zero());
+  add_scaled_cross(W, Au, Av, N);
+  add_scaled_cross(Wv, A, Au, N);
+  add_scaled_cross(Wu, Av, A, N);
+  return N;
+}
+
+BernsteinVectorPatch restrict_patch(const BernsteinVectorPatch& f, double u0, double u1, double v0, double v1) {
+  BernsteinVectorPatch r = f;
+  const std::size_t row = static_cast<std::size_t>(f.dv + 1);
+  for (int j = 0; j <= f.dv; ++j) restrict_line(r.c.data() + j, f.du, row, u0, u1);
+  for (int i = 0; i <= f.du; ++i) restrict_line(r.c.data() + static_cast<std::size_t>(i) * row, f.dv, 1, v0, v1);
+  return r;
+}
+
+double normal_cone_cosine(const BernsteinVectorPatch& N, const Vector3& axis) {
+  double cos_min = 1.0;
+  for (const Vector3& c : N.c) {
+    const double len = c.norm();
+    if (!(len > 0.0)) return 0.0;  // a vanishing coefficient: the normal may vanish in the patch
+    cos_min = std::min(cos_min, c.dot(axis) / len);
+  }
+  return cos_min;
+}
+
+}  // namespace probecomp::nurbs
