@@ -294,7 +294,6 @@ struct ClosestPointSolver::Seeds {
   // critical point (cells on the domain's edges or on a C0 knot line) or no cone below 90° exists.
   std::vector<double> cone_tan;
   std::vector<char> in_region;  // the cell meets the region (all cells without one)
-  std::vector<Eigen::Array3d> aabb_lo, aabb_hi;  // axis-aligned box of each cell's Bézier control points
   // A bounding-volume hierarchy over the cells, built on the parameter grid: halving the longer of the two index
   // ranges keeps every node a compact piece of the surface. Node 0 is the root.
   struct Node {
@@ -310,13 +309,15 @@ struct ClosestPointSolver::Seeds {
   std::vector<std::uint32_t> cloud_cell;
   std::unique_ptr<PointTree> tree;
 
-  int build(int i0, int i1, int j0, int j1) {
+  // The hierarchy over cells [i0, i1) × [j0, j1); `leaf_lo`, `leaf_hi`: each cell's axis-aligned box.
+  int build(int i0, int i1, int j0, int j1, const std::vector<Eigen::Array3d>& leaf_lo,
+            const std::vector<Eigen::Array3d>& leaf_hi) {
     const int at = static_cast<int>(nodes.size());
     nodes.emplace_back();
     if (i1 - i0 == 1 && j1 - j0 == 1) {
       const std::size_t k = static_cast<std::size_t>(i0) * static_cast<std::size_t>(axis_v.count()) + static_cast<std::size_t>(j0);
-      nodes[at].lo = aabb_lo[k];
-      nodes[at].hi = aabb_hi[k];
+      nodes[at].lo = leaf_lo[k];
+      nodes[at].hi = leaf_hi[k];
       nodes[at].cell = static_cast<std::uint32_t>(k);
       nodes[at].in_region = in_region[k] != 0;
       leaf_of[k] = at;
@@ -325,12 +326,12 @@ struct ClosestPointSolver::Seeds {
     int l, r;
     if (i1 - i0 >= j1 - j0) {
       const int mid = (i0 + i1) / 2;
-      l = build(i0, mid, j0, j1);
-      r = build(mid, i1, j0, j1);
+      l = build(i0, mid, j0, j1, leaf_lo, leaf_hi);
+      r = build(mid, i1, j0, j1, leaf_lo, leaf_hi);
     } else {
       const int mid = (j0 + j1) / 2;
-      l = build(i0, i1, j0, mid);
-      r = build(i0, i1, mid, j1);
+      l = build(i0, i1, j0, mid, leaf_lo, leaf_hi);
+      r = build(i0, i1, mid, j1, leaf_lo, leaf_hi);
     }
     Node& node = nodes[at];
     node.left = l;
@@ -480,8 +481,7 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
 
   const std::size_t n = static_cast<std::size_t>(nu) * nv;
   sd.seed.resize(n);
-  sd.aabb_lo.resize(n);
-  sd.aabb_hi.resize(n);
+  std::vector<Eigen::Array3d> aabb_lo(n), aabb_hi(n);  // each cell's control points' axis-aligned box
   sd.u.resize(n);
   sd.v.resize(n);
   sd.box.resize(n);
@@ -506,6 +506,9 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
     return (axis.first_in_span(c) && crease(axis.span(c))) || (axis.last_in_span(c) && crease(axis.span(c) + 1));
   };
   tbb::parallel_for(0, nu, [&](int i) {
+    // The span's normal polynomial cut down to this row of cells in u, once per span in v.
+    BernsteinVectorPatch row_normals;
+    int row_span_v = -1;
     for (int j = 0; j < nv; ++j) {
       const std::size_t k = static_cast<std::size_t>(i) * nv + j;
       sd.u[k] = 0.5 * (sd.axis_u.lower(i) + sd.axis_u.upper(i));
@@ -527,28 +530,31 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
       box.enclose(d.S, patch.net);
       sd.cone_tan[k] = std::numeric_limits<double>::infinity();
       if (!edge_or_crease(sd.axis_u, surface_.U(), i) && !edge_or_crease(sd.axis_v, surface_.V(), j)) {
-        const BernsteinVectorPatch N =
-            restrict_patch(span_normals[static_cast<std::size_t>(sd.axis_u.span(i)) * spans_v + sd.axis_v.span(j)],
-                           sd.axis_u.t0(i), sd.axis_u.t1(i), sd.axis_v.t0(j), sd.axis_v.t1(j));
+        if (sd.axis_v.span(j) != row_span_v) {
+          row_span_v = sd.axis_v.span(j);
+          row_normals = restrict_patch(span_normals[static_cast<std::size_t>(sd.axis_u.span(i)) * spans_v + row_span_v],
+                                       sd.axis_u.t0(i), sd.axis_u.t1(i), 0.0, 1.0);
+        }
+        const BernsteinVectorPatch N = restrict_patch(row_normals, 0.0, 1.0, sd.axis_v.t0(j), sd.axis_v.t1(j));
         const double c = normal_cone_cosine(N, box.n);
         if (c > 0.0) sd.cone_tan[k] = std::sqrt(std::max(0.0, 1.0 - c * c)) / c;
       }
-      sd.aabb_lo[k] = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
-      sd.aabb_hi[k] = -sd.aabb_lo[k];
+      aabb_lo[k] = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
+      aabb_hi[k] = -aabb_lo[k];
       for (const HomogeneousPoint& P : patch.net) {
         const Eigen::Array3d x = (P.head<3>() / P.w()).array();
-        sd.aabb_lo[k] = sd.aabb_lo[k].min(x);
-        sd.aabb_hi[k] = sd.aabb_hi[k].max(x);
+        aabb_lo[k] = aabb_lo[k].min(x);
+        aabb_hi[k] = aabb_hi[k].max(x);
       }
-      sd.aabb_lo[k] -= kCellBoundFloor;
-      sd.aabb_hi[k] += kCellBoundFloor;
+      aabb_lo[k] -= kCellBoundFloor;
+      aabb_hi[k] += kCellBoundFloor;
       if (region_ != nullptr) sd.in_region[k] = region_->meets(patch.box) ? 1 : 0;
       sd.seed[k] = d.S;
     }
   });
   sd.nodes.reserve(2 * n);
   sd.leaf_of.resize(n);
-  sd.build(0, nu, 0, nv);
+  sd.build(0, nu, 0, nv, aabb_lo, aabb_hi);
   for (std::size_t k = 0; k < n; ++k) {
     if (!sd.in_region[k]) continue;
     sd.cloud.points.push_back(sd.seed[k]);

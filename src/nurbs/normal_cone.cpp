@@ -1,8 +1,11 @@
 #include "nurbs/normal_cone.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
+
+#include "nurbs/knot_vector.hpp"
 
 namespace probecomp::nurbs {
 
@@ -15,26 +18,41 @@ struct ScalarPatch {
   [[nodiscard]] double at(int i, int j) const { return c[static_cast<std::size_t>(i * (dv + 1) + j)]; }
 };
 
-double binomial(int n, int k) {
-  double b = 1.0;
-  for (int i = 1; i <= k; ++i) b = b * (n - k + i) / i;
-  return b;
+// Binomial coefficients C(n, k) for n up to the normal polynomial's degree, 3·kMaxDegree − 1.
+constexpr int kMaxBinomial = 3 * kMaxDegree;
+const std::array<std::array<double, kMaxBinomial + 1>, kMaxBinomial + 1>& binomials() {
+  static const auto table = [] {
+    std::array<std::array<double, kMaxBinomial + 1>, kMaxBinomial + 1> C{};
+    for (int n = 0; n <= kMaxBinomial; ++n) {
+      C[n][0] = 1.0;
+      for (int k = 1; k <= n; ++k) C[n][k] = C[n - 1][k - 1] + (k < n ? C[n - 1][k] : 0.0);
+    }
+    return C;
+  }();
+  return table;
 }
 
 // The product of two Bernstein polynomials of degrees (m1, n1) and (m2, n2) (Farouki & Rajan 1988):
 // h_rs = Σ_{i+k=r, j+l=s} C(m1,i) C(m2,k) C(n1,j) C(n2,l) / (C(m1+m2,r) C(n1+n2,s)) · f_ij g_kl.
+// The factors split by direction, so each direction's table is made once per product.
 template <class F, class G, class Op, class T>
 void accumulate_product(const F& f, const G& g, Op op, std::vector<T>& h) {
+  const auto& C = binomials();
   const int m = f.du + g.du, n = f.dv + g.dv;
+  double fu[kMaxBinomial + 1][kMaxBinomial + 1], fv[kMaxBinomial + 1][kMaxBinomial + 1];
   for (int i = 0; i <= f.du; ++i)
-    for (int j = 0; j <= f.dv; ++j)
+    for (int k = 0; k <= g.du; ++k) fu[i][k] = C[f.du][i] * C[g.du][k] / C[m][i + k];
+  for (int j = 0; j <= f.dv; ++j)
+    for (int l = 0; l <= g.dv; ++l) fv[j][l] = C[f.dv][j] * C[g.dv][l] / C[n][j + l];
+  for (int i = 0; i <= f.du; ++i)
+    for (int j = 0; j <= f.dv; ++j) {
+      const auto& a = f.c[static_cast<std::size_t>(i * (f.dv + 1) + j)];
       for (int k = 0; k <= g.du; ++k)
         for (int l = 0; l <= g.dv; ++l) {
-          const double scale = binomial(f.du, i) * binomial(g.du, k) * binomial(f.dv, j) * binomial(g.dv, l) /
-                               (binomial(m, i + k) * binomial(n, j + l));
           h[static_cast<std::size_t>((i + k) * (n + 1) + (j + l))] +=
-              scale * op(f.c[static_cast<std::size_t>(i * (f.dv + 1) + j)], g.c[static_cast<std::size_t>(k * (g.dv + 1) + l)]);
+              (fu[i][k] * fv[j][l]) * op(a, g.c[static_cast<std::size_t>(k * (g.dv + 1) + l)]);
         }
+    }
 }
 
 struct VectorPatch {

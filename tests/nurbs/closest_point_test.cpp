@@ -98,6 +98,29 @@ TEST(ClosestPoint, RefineFindsTheLocalFootFromAnyStart) {
   EXPECT_GT(r.iterations, 0);
 }
 
+// At an interior foot point S − P is normal to the surface: its components along S_u and S_v (the foot's
+// tangential error, mm) must be at rounding level, whatever shortcut the iteration takes to finish.
+TEST(ClosestPoint, InteriorFootIsOrthogonalToTheTangentsToRounding) {
+  const Surface surfaces[] = {
+      testing::freeform_panel(2024, 20),
+      testing::random_rational_surface(1000, {.nu = 10, .nv = 9, .height = 30.0, .weight_min = 0.3, .weight_max = 3.0})};
+  for (const Surface& s : surfaces) {
+    const ClosestPointSolver solver(s);
+    const auto points = testing::random_points_near(s, 5000, 5.0, 5);
+    const auto results = solver.closest_points(points);
+    int interior = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (results[i].status != ClosestPointStatus::Converged) continue;
+      ++interior;
+      const SurfaceD1 d = derivatives_d1(s, results[i].u, results[i].v);
+      const Vector3 e = points[i] - d.S;
+      EXPECT_LT(std::abs(e.dot(d.Su)) / d.Su.norm(), 1e-9) << i;
+      EXPECT_LT(std::abs(e.dot(d.Sv)) / d.Sv.norm(), 1e-9) << i;
+    }
+    EXPECT_GT(interior, 4500);
+  }
+}
+
 TEST(ClosestPoint, BatchIsIdenticalWhateverTheThreadCount) {
   const Surface s = testing::random_rational_surface(9, {.nu = 20, .nv = 20});
   const ClosestPointSolver solver(s);
