@@ -9,7 +9,6 @@
 #include <limits>
 
 #include "nurbs/normal_cone.hpp"
-#include "nurbs/point_tree.hpp"
 
 namespace probecomp::nurbs {
 
@@ -299,15 +298,11 @@ struct ClosestPointSolver::Seeds {
   struct Node {
     Eigen::Array3d lo, hi;  // axis-aligned box holding the node's cells (their control points)
     int left = -1, right = -1;  // children, or -1 for a leaf
-    int parent = -1;
     std::uint32_t cell = 0;     // a leaf's cell
     bool in_region = true;      // some cell of the node meets the region
   };
   std::vector<Node> nodes;
-  std::vector<int> leaf_of;  // each cell's leaf node
-  PointCloud cloud;  // the seeds of the cells in the region
-  std::vector<std::uint32_t> cloud_cell;
-  std::unique_ptr<PointTree> tree;
+  std::vector<char> seed_on_face;  // the seed lies in the region (all seeds without one): a point of the face
 
   // The hierarchy over cells [i0, i1) × [j0, j1); `leaf_lo`, `leaf_hi`: each cell's axis-aligned box.
   int build(int i0, int i1, int j0, int j1, const std::vector<Eigen::Array3d>& leaf_lo,
@@ -320,7 +315,6 @@ struct ClosestPointSolver::Seeds {
       nodes[at].hi = leaf_hi[k];
       nodes[at].cell = static_cast<std::uint32_t>(k);
       nodes[at].in_region = in_region[k] != 0;
-      leaf_of[k] = at;
       return at;
     }
     int l, r;
@@ -339,8 +333,6 @@ struct ClosestPointSolver::Seeds {
     node.lo = nodes[l].lo.min(nodes[r].lo);
     node.hi = nodes[l].hi.max(nodes[r].hi);
     node.in_region = nodes[l].in_region || nodes[r].in_region;
-    nodes[l].parent = at;
-    nodes[r].parent = at;
     return at;
   }
 };
@@ -553,15 +545,11 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
     }
   });
   sd.nodes.reserve(2 * n);
-  sd.leaf_of.resize(n);
   sd.build(0, nu, 0, nv, aabb_lo, aabb_hi);
-  for (std::size_t k = 0; k < n; ++k) {
-    if (!sd.in_region[k]) continue;
-    sd.cloud.points.push_back(sd.seed[k]);
-    sd.cloud_cell.push_back(static_cast<std::uint32_t>(k));
+  sd.seed_on_face.assign(n, 1);
+  if (region_ != nullptr) {
+    for (std::size_t k = 0; k < n; ++k) sd.seed_on_face[k] = sd.in_region[k] && region_->contains(sd.u[k], sd.v[k]) ? 1 : 0;
   }
-  sd.tree = std::make_unique<PointTree>(3, sd.cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  sd.tree->buildIndex();
 }
 
 ClosestPointSolver::~ClosestPointSolver() = default;
@@ -647,73 +635,49 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   int iterations = 0;
   int starts = 0;
 
-  // Without a bound, the cell of the nearest seed (k-d tree; squared distance) is searched first, whatever its
-  // tests: its point bounds the rest. Then depth first over the cell hierarchy, nearer child first, into every
-  // node whose box is nearer than the best point; a cell is searched if its oriented box is nearer too and its
-  // normals allow a critical point there (or it lies on an edge or a crease). The order depends on the query alone.
-  std::uint32_t first = std::numeric_limits<std::uint32_t>::max();
-  if (!std::isfinite(best.distance) && sd.nodes[0].in_region) {
-    const double q[3] = {query.x(), query.y(), query.z()};
-    double nearest_dist_sq = 0.0;
-    std::uint32_t nearest = 0;
-    nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(1);
-    knn.init(&nearest, &nearest_dist_sq);
-    sd.tree->findNeighbors(knn, q, nanoflann::SearchParams());
-    first = sd.cloud_cell[nearest];
-    search_cell(query, first, best, iterations, starts);
-  }
-  // Squared distances from here on: the boxes' lower bounds against best.distance².
-  using Entry = std::pair<double, int>;  // (squared lower bound, node)
-  thread_local std::vector<Entry> stack;
+  // One pass depth first over the cell hierarchy, nearer child first, gathers the cells whose boxes are nearer
+  // than the bound: the best point given, or the nearest seed on the face seen so far (a point of the surface),
+  // whichever is smaller. Squared distances throughout the pass.
+  using Candidate = std::pair<double, std::uint32_t>;  // (seed's squared distance, cell)
+  thread_local std::vector<Candidate> candidates;
+  thread_local std::vector<int> stack;
+  candidates.clear();
   stack.clear();
-  auto push_if_nearer = [&](int at) {
-    const Seeds::Node& node = sd.nodes[static_cast<std::size_t>(at)];
-    if (!node.in_region) return;
-    const double d = box_distance_sq(query, node.lo, node.hi);
-    if (d < best.distance * best.distance) stack.emplace_back(d, at);
-  };
-  // Depth first below every node on the stack, nearer child first.
-  auto descend = [&] {
-    while (!stack.empty()) {
-      const auto [lower_sq, at] = stack.back();
-      stack.pop_back();
-      if (lower_sq >= best.distance * best.distance) continue;
-      const Seeds::Node& node = sd.nodes[static_cast<std::size_t>(at)];
-      if (node.left < 0) {
-        const std::uint32_t k = node.cell;
-        const Vector3 q_minus_c = query - sd.seed[k];
-        if (sd.box[k].lower_bound(q_minus_c) >= best.distance) continue;
-        if (!sd.box[k].may_hold_critical_point(q_minus_c, sd.cone_tan[k])) continue;
-          search_cell(query, k, best, iterations, starts);
-        continue;
-      }
-      const Seeds::Node& l = sd.nodes[static_cast<std::size_t>(node.left)];
-      const Seeds::Node& r = sd.nodes[static_cast<std::size_t>(node.right)];
-      constexpr double kNever = std::numeric_limits<double>::infinity();
-      const double dl = l.in_region ? box_distance_sq(query, l.lo, l.hi) : kNever;
-      const double dr = r.in_region ? box_distance_sq(query, r.lo, r.hi) : kNever;
-      const double bound_sq = best.distance * best.distance;
-      if (dl <= dr) {
-        if (dr < bound_sq) stack.emplace_back(dr, node.right);
-        if (dl < bound_sq) stack.emplace_back(dl, node.left);
-      } else {
-        if (dl < bound_sq) stack.emplace_back(dl, node.left);
-        if (dr < bound_sq) stack.emplace_back(dr, node.right);
-      }
+  double bound_sq = best.distance * best.distance;
+  if (sd.nodes[0].in_region && box_distance_sq(query, sd.nodes[0].lo, sd.nodes[0].hi) < bound_sq) stack.push_back(0);
+  while (!stack.empty()) {
+    const Seeds::Node& node = sd.nodes[static_cast<std::size_t>(stack.back())];
+    stack.pop_back();
+    if (node.left < 0) {
+      const double seed_sq = (query - sd.seed[node.cell]).squaredNorm();
+      if (sd.seed_on_face[node.cell]) bound_sq = std::min(bound_sq, seed_sq);
+      candidates.emplace_back(seed_sq, node.cell);
+      continue;
     }
-  };
-  if (first != std::numeric_limits<std::uint32_t>::max()) {
-    // Up from the first cell's leaf: the rest of the hierarchy is the siblings of the nodes on the way, nearest
-    // first; this skips the boxes of the nodes that hold the first cell, which a search from the root would test.
-    for (int at = sd.leaf_of[first]; sd.nodes[static_cast<std::size_t>(at)].parent >= 0;
-         at = sd.nodes[static_cast<std::size_t>(at)].parent) {
-      const Seeds::Node& parent = sd.nodes[static_cast<std::size_t>(sd.nodes[static_cast<std::size_t>(at)].parent)];
-      push_if_nearer(parent.left == at ? parent.right : parent.left);
-      descend();
+    const Seeds::Node& l = sd.nodes[static_cast<std::size_t>(node.left)];
+    const Seeds::Node& r = sd.nodes[static_cast<std::size_t>(node.right)];
+    constexpr double kNever = std::numeric_limits<double>::infinity();
+    const double dl = l.in_region ? box_distance_sq(query, l.lo, l.hi) : kNever;
+    const double dr = r.in_region ? box_distance_sq(query, r.lo, r.hi) : kNever;
+    if (dl <= dr) {
+      if (dr < bound_sq) stack.push_back(node.right);
+      if (dl < bound_sq) stack.push_back(node.left);
+    } else {
+      if (dl < bound_sq) stack.push_back(node.left);
+      if (dr < bound_sq) stack.push_back(node.right);
     }
-  } else {
-    push_if_nearer(0);
-    descend();
+  }
+  // Nearest seed first: without a bound its cell is searched whatever its tests, and its point bounds the rest;
+  // after it, a cell is searched only if its oriented box is nearer than the best point and its normals allow a
+  // critical point there (or it lies on an edge or a crease). The order depends on the query alone.
+  std::sort(candidates.begin(), candidates.end());
+  for (const auto& [seed_sq, k] : candidates) {
+    if (std::isfinite(best.distance)) {
+      const Vector3 q_minus_c = query - sd.seed[k];
+      if (sd.box[k].lower_bound(q_minus_c) >= best.distance) continue;
+      if (!sd.box[k].may_hold_critical_point(q_minus_c, sd.cone_tan[k])) continue;
+    }
+    search_cell(query, k, best, iterations, starts);
   }
   best.iterations = iterations;
   best.starts = starts;

@@ -8,9 +8,9 @@
 // Each cell carries three rigorous bounds from its Bézier control points (convex hull property): an oriented
 // box (a lower bound on the distance), an axis-aligned box (for a bounding-volume hierarchy over the cells) and
 // a normal cone (normal_cone.hpp), which excludes a cell that cannot hold a critical point of the distance.
-// Newton runs inside the nearest seed's cell, then inside every other cell that could hold a closer point
-// (hierarchy walked depth first from that cell's leaf up); a Newton that stops on a cell's inner edge is
-// followed beyond it. The batch query runs in parallel and gives the same result whatever the thread count.
+// One depth-first pass over the hierarchy gathers the cells whose boxes are nearer than the nearest seed; Newton
+// runs inside the nearest seed's cell, then inside every other gathered cell that could still hold a closer
+// point; a Newton that stops on a cell's inner edge is followed beyond it. The batch query runs in parallel and gives the same result whatever the thread count.
 // Known limit: two minima inside one cell can be missed (Newton finds one). Cells are small against the part's
 // curvature, so this needs a query near a focal point (a centre of curvature) of the surface.
 
