@@ -477,20 +477,8 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
   sd.u.resize(n);
   sd.v.resize(n);
   sd.box.resize(n);
-  sd.cone_tan.resize(n);
   sd.in_region.assign(n, 1);
 
-  // The normal polynomial of each knot span (see normal_cone.hpp), cut down to each cell below.
-  std::vector<BernsteinVectorPatch> span_normals(static_cast<std::size_t>(spans_u) * spans_v);
-  tbb::parallel_for(0, spans_u, [&](int su) {
-    std::vector<HomogeneousPoint> net;
-    for (int sv = 0; sv < spans_v; ++sv) {
-      net.clear();
-      for (int a = 0; a <= p; ++a)
-        for (int b = 0; b <= q; ++b) net.push_back(sd.bezier.homogeneous(su * p + a, sv * q + b));
-      span_normals[static_cast<std::size_t>(su) * spans_v + sv] = normal_polynomial(p, q, net);
-    }
-  });
   // A minimum on the domain's edge or on a knot line where the surface is only C0 (multiplicity ≥ degree) need
   // not be a critical point: cells touching one are never culled by their normal cone.
   auto edge_or_crease = [](const CellAxis& axis, const KnotVector& K, int c) {
@@ -498,9 +486,6 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
     return (axis.first_in_span(c) && crease(axis.span(c))) || (axis.last_in_span(c) && crease(axis.span(c) + 1));
   };
   tbb::parallel_for(0, nu, [&](int i) {
-    // The span's normal polynomial cut down to this row of cells in u, once per span in v.
-    BernsteinVectorPatch row_normals;
-    int row_span_v = -1;
     for (int j = 0; j < nv; ++j) {
       const std::size_t k = static_cast<std::size_t>(i) * nv + j;
       sd.u[k] = 0.5 * (sd.axis_u.lower(i) + sd.axis_u.upper(i));
@@ -520,17 +505,6 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
       }
       const BezierPatch patch = cell_patch(sd.bezier, sd.axis_u, sd.axis_v, i, j);
       box.enclose(d.S, patch.net);
-      sd.cone_tan[k] = std::numeric_limits<double>::infinity();
-      if (!edge_or_crease(sd.axis_u, surface_.U(), i) && !edge_or_crease(sd.axis_v, surface_.V(), j)) {
-        if (sd.axis_v.span(j) != row_span_v) {
-          row_span_v = sd.axis_v.span(j);
-          row_normals = restrict_patch(span_normals[static_cast<std::size_t>(sd.axis_u.span(i)) * spans_v + row_span_v],
-                                       sd.axis_u.t0(i), sd.axis_u.t1(i), 0.0, 1.0);
-        }
-        const BernsteinVectorPatch N = restrict_patch(row_normals, 0.0, 1.0, sd.axis_v.t0(j), sd.axis_v.t1(j));
-        const double c = normal_cone_cosine(N, box.n);
-        if (c > 0.0) sd.cone_tan[k] = std::sqrt(std::max(0.0, 1.0 - c * c)) / c;
-      }
       aabb_lo[k] = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
       aabb_hi[k] = -aabb_lo[k];
       for (const HomogeneousPoint& P : patch.net) {
@@ -542,6 +516,28 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
       aabb_hi[k] += kCellBoundFloor;
       if (region_ != nullptr) sd.in_region[k] = region_->meets(patch.box) ? 1 : 0;
       sd.seed[k] = d.S;
+    }
+  });
+  // Normal cones: each knot span's normal polynomial (normal_cone.hpp) cut into its cells, about each cell's frame.
+  sd.cone_tan.assign(n, std::numeric_limits<double>::infinity());
+  tbb::parallel_for(0, spans_u * spans_v, [&](int span) {
+    const int su = span / spans_v, sv = span % spans_v;
+    std::vector<HomogeneousPoint> net;
+    for (int a = 0; a <= p; ++a)
+      for (int b = 0; b <= q; ++b) net.push_back(sd.bezier.homogeneous(su * p + a, sv * q + b));
+    const int first_u = sd.axis_u.first[static_cast<std::size_t>(su)], first_v = sd.axis_v.first[static_cast<std::size_t>(sv)];
+    const std::vector<BernsteinVectorPatch> rows = split_patch(normal_polynomial(p, q, net), 0, sd.axis_u.cells_in(su));
+    for (int a = 0; a < sd.axis_u.cells_in(su); ++a) {
+      const int i = first_u + a;
+      if (edge_or_crease(sd.axis_u, surface_.U(), i)) continue;
+      const std::vector<BernsteinVectorPatch> cells = split_patch(rows[static_cast<std::size_t>(a)], 1, sd.axis_v.cells_in(sv));
+      for (int b = 0; b < sd.axis_v.cells_in(sv); ++b) {
+        const int j = first_v + b;
+        if (edge_or_crease(sd.axis_v, surface_.V(), j)) continue;
+        const std::size_t k = static_cast<std::size_t>(i) * nv + j;
+        const double c = normal_cone_cosine(cells[static_cast<std::size_t>(b)], sd.box[k].n);
+        if (c > 0.0) sd.cone_tan[k] = std::sqrt(std::max(0.0, 1.0 - c * c)) / c;
+      }
     }
   });
   sd.nodes.reserve(2 * n);

@@ -111,6 +111,13 @@ BernsteinVectorPatch normal_polynomial(int p, int q, std::span<const Homogeneous
     W.c.push_back(P.w());
   }
   const VectorPatch Au = difference(A, 0), Av = difference(A, 1);
+  if (std::all_of(W.c.begin(), W.c.end(), [&](double w) { return w == W.c.front(); })) {
+    // Equal weights: W_u = W_v = 0 and N = W (A_u × A_v), of degree (2p − 1, 2q − 1); the constant W > 0 drops out.
+    BernsteinVectorPatch N{2 * p - 1, 2 * q - 1, {}};
+    N.c.assign(static_cast<std::size_t>(2 * p * 2 * q), Vector3::Zero());
+    accumulate_product(Au, Av, [](const Vector3& x, const Vector3& y) -> Vector3 { return x.cross(y); }, N.c);
+    return N;
+  }
   const ScalarPatch Wu = difference(W, 0), Wv = difference(W, 1);
   BernsteinVectorPatch N{3 * p - 1, 3 * q - 1, {}};
   N.c.assign(static_cast<std::size_t>(3 * p * 3 * q), Vector3::Zero());
@@ -128,14 +135,43 @@ BernsteinVectorPatch restrict_patch(const BernsteinVectorPatch& f, double u0, do
   return r;
 }
 
-double normal_cone_cosine(const BernsteinVectorPatch& N, const Vector3& axis) {
-  double cos_min = 1.0;
-  for (const Vector3& c : N.c) {
-    const double len = c.norm();
-    if (!(len > 0.0)) return 0.0;  // a vanishing coefficient: the normal may vanish in the patch
-    cos_min = std::min(cos_min, c.dot(axis) / len);
+std::vector<BernsteinVectorPatch> split_patch(const BernsteinVectorPatch& f, int direction, int pieces) {
+  std::vector<BernsteinVectorPatch> parts;
+  parts.reserve(static_cast<std::size_t>(pieces));
+  BernsteinVectorPatch rest = f;
+  const int deg = direction == 0 ? f.du : f.dv;
+  const int lines = direction == 0 ? f.dv + 1 : f.du + 1;
+  const std::size_t stride = direction == 0 ? static_cast<std::size_t>(f.dv + 1) : 1;
+  const std::size_t line_step = direction == 0 ? 1 : static_cast<std::size_t>(f.dv + 1);
+  for (int k = 0; k + 1 < pieces; ++k) {
+    // Cut the rest at t = 1 / (pieces − k): the left part is piece k, the right part the new rest.
+    const double t = 1.0 / (pieces - k);
+    BernsteinVectorPatch left = rest;
+    for (int line = 0; line < lines; ++line) {
+      Vector3* w = rest.c.data() + static_cast<std::size_t>(line) * line_step;
+      Vector3* l = left.c.data() + static_cast<std::size_t>(line) * line_step;
+      auto at = [&](Vector3* base, int i) -> Vector3& { return base[static_cast<std::size_t>(i) * stride]; };
+      at(l, 0) = at(w, 0);
+      for (int level = 1; level <= deg; ++level) {
+        for (int i = 0; i <= deg - level; ++i) at(w, i) = (1.0 - t) * at(w, i) + t * at(w, i + 1);
+        at(l, level) = at(w, 0);
+      }
+    }
+    parts.push_back(std::move(left));
   }
-  return cos_min;
+  parts.push_back(std::move(rest));
+  return parts;
+}
+
+double normal_cone_cosine(const BernsteinVectorPatch& N, const Vector3& axis) {
+  // min over the coefficients of c·a / |c|, kept squared (c·a)² / |c|² while every c·a is positive.
+  double cos_sq_min = 1.0;
+  for (const Vector3& c : N.c) {
+    const double along = c.dot(axis);
+    if (!(along > 0.0)) return 0.0;  // a coefficient on or beyond 90°, or vanishing: no cone below 90°
+    cos_sq_min = std::min(cos_sq_min, along * along / c.squaredNorm());
+  }
+  return std::sqrt(cos_sq_min);
 }
 
 }  // namespace probecomp::nurbs

@@ -21,12 +21,16 @@ struct BernsteinVectorPatch {
 };
 
 // N (up to a positive factor) of the rational Bézier patch with homogeneous net `net` ((p+1)·(q+1) points, row
-// u major, Pw = (w P, w)); p, q ≥ 1.
+// u major, Pw = (w P, w)); p, q ≥ 1. With equal weights the degree is only (2p − 1, 2q − 1).
 [[nodiscard]] BernsteinVectorPatch normal_polynomial(int p, int q, std::span<const HomogeneousPoint> net);
 
 // The same polynomial over the part [u0,u1] × [v0,v1] of [0,1]², reparametrised to [0,1]² (de Casteljau).
 [[nodiscard]] BernsteinVectorPatch restrict_patch(const BernsteinVectorPatch& f, double u0, double u1, double v0,
                                                   double v1);
+
+// The same polynomial cut into `pieces` equal parts along u (direction 0) or v (1), each reparametrised to
+// [0,1]²: one de Casteljau split per cut, half the work of restricting to each part on its own.
+[[nodiscard]] std::vector<BernsteinVectorPatch> split_patch(const BernsteinVectorPatch& f, int direction, int pieces);
 
 // The cosine of the half-angle of the cone about the unit vector `axis` that holds every coefficient of `N`, or
 // a value ≤ 0 when the coefficients do not all lie strictly on the axis's side (no cone below 90°: a normal may

@@ -44,7 +44,7 @@ TEST(NormalCone, NormalPolynomialPointsAlongTheSurfaceNormal) {
   for (const auto& [p, q] : degrees) {
     const Surface s = bezier_patch(seed++, p, q, 3.0);
     const BernsteinVectorPatch N = normal_polynomial(p, q, net_of(s));
-    ASSERT_EQ(N.du, 3 * p - 1);
+    ASSERT_EQ(N.du, 3 * p - 1);  // rational: weights differ
     ASSERT_EQ(N.dv, 3 * q - 1);
     for (int trial = 0; trial < 100; ++trial) {
       const double u = t(rng), v = t(rng);
@@ -54,6 +54,38 @@ TEST(NormalCone, NormalPolynomialPointsAlongTheSurfaceNormal) {
       // Direction and sense: N = W³ S_u × S_v up to the positive factor p·q dropped from the derivatives.
       EXPECT_GT(n.dot(cross), 0.0);
       EXPECT_NEAR(n.normalized().cross(cross.normalized()).norm(), 0.0, 1e-10) << p << "x" << q;
+    }
+  }
+}
+
+TEST(NormalCone, EqualWeightsGiveTheLowerDegreePolynomial) {
+  const Surface s = testing::random_rational_surface(5, {.p = 3, .q = 2, .nu = 4, .nv = 3, .height = 40.0,
+                                                         .weight_min = 1.0, .weight_max = 1.0});
+  const BernsteinVectorPatch N = normal_polynomial(3, 2, net_of(s));
+  ASSERT_EQ(N.du, 5);
+  ASSERT_EQ(N.dv, 3);
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> t(0.0, 1.0);
+  for (int trial = 0; trial < 100; ++trial) {
+    const double u = t(rng), v = t(rng);
+    const SurfaceD1 d = derivatives_d1(s, u, v);
+    const Vector3 cross = d.Su.cross(d.Sv);
+    const Vector3 n = evaluate_patch(N, u, v);
+    EXPECT_GT(n.dot(cross), 0.0);
+    EXPECT_NEAR(n.normalized().cross(cross.normalized()).norm(), 0.0, 1e-10);
+  }
+}
+
+TEST(NormalCone, SplitPiecesAreTheRestrictions) {
+  const Surface s = bezier_patch(8, 3, 3, 2.0);
+  const BernsteinVectorPatch N = normal_polynomial(3, 3, net_of(s));
+  for (const int direction : {0, 1}) {
+    const auto pieces = split_patch(N, direction, 5);
+    ASSERT_EQ(pieces.size(), 5u);
+    for (int k = 0; k < 5; ++k) {
+      const BernsteinVectorPatch R = direction == 0 ? restrict_patch(N, k / 5.0, (k + 1) / 5.0, 0.0, 1.0)
+                                                    : restrict_patch(N, 0.0, 1.0, k / 5.0, (k + 1) / 5.0);
+      for (std::size_t c = 0; c < R.c.size(); ++c) EXPECT_NEAR((pieces[k].c[c] - R.c[c]).norm(), 0.0, 1e-9 * R.c[c].norm() + 1e-12);
     }
   }
 }
