@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "nurbs/de_casteljau.hpp"
 #include "nurbs/normal_cone.hpp"
 
 namespace probecomp::nurbs {
@@ -339,23 +340,6 @@ struct ClosestPointSolver::Seeds {
 
 namespace {
 
-// The part [t0, t1] ⊂ [0, 1] of a Bézier curve w[0..deg], in place: de Casteljau at t0 keeping the right part
-// (ascending sweep: w[k] ends as P_k^(deg−k)), then at the matching point keeping the left part (descending
-// sweep: w[k] ends as P_0^(k)).
-void restrict_bezier(HomogeneousPoint* w, int deg, double t0, double t1) {
-  if (t0 > 0.0) {
-    for (int level = 1; level <= deg; ++level) {
-      for (int k = 0; k <= deg - level; ++k) w[k] = (1.0 - t0) * w[k] + t0 * w[k + 1];
-    }
-  }
-  const double s = t0 < 1.0 ? (t1 - t0) / (1.0 - t0) : 1.0;
-  if (s < 1.0) {
-    for (int level = 1; level <= deg; ++level) {
-      for (int k = deg; k >= level; --k) w[k] = (1.0 - s) * w[k - 1] + s * w[k];
-    }
-  }
-}
-
 // Seed cell (cu, cv) as a Bézier patch: its knot span's Bézier net (from the refined surface) cut down to the
 // cell's part of the span by de Casteljau, and its parameter box. Refining only at the breakpoints keeps the
 // refined net near the surface's own size, where refining at every cell boundary multiplied it by the cells
@@ -372,12 +356,12 @@ BezierPatch cell_patch(const Surface& bezier, const CellAxis& axis_u, const Cell
   HomogeneousPoint work[kMaxDegree + 1];
   for (int b = 0; b <= q; ++b) {
     for (int a = 0; a <= p; ++a) work[a] = patch.net[static_cast<std::size_t>(a * (q + 1) + b)];
-    restrict_bezier(work, p, axis_u.t0(cu), axis_u.t1(cu));
+    restrict_bezier(work, p, 1, axis_u.t0(cu), axis_u.t1(cu));
     for (int a = 0; a <= p; ++a) patch.net[static_cast<std::size_t>(a * (q + 1) + b)] = work[a];
   }
   for (int a = 0; a <= p; ++a) {
     HomogeneousPoint* row = patch.net.data() + a * (q + 1);
-    restrict_bezier(row, q, axis_v.t0(cv), axis_v.t1(cv));
+    restrict_bezier(row, q, 1, axis_v.t0(cv), axis_v.t1(cv));
   }
   return patch;
 }

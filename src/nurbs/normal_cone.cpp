@@ -5,6 +5,7 @@
 #include <cassert>
 #include <cmath>
 
+#include "nurbs/de_casteljau.hpp"
 #include "nurbs/knot_vector.hpp"
 
 namespace probecomp::nurbs {
@@ -86,20 +87,6 @@ void add_scaled_cross(const ScalarPatch& s, const VectorPatch& a, const VectorPa
   accumulate_product(s, ab, [](double x, const Vector3& y) -> Vector3 { return x * y; }, N.c);
 }
 
-// De Casteljau restriction of one Bernstein line of degree `deg` (stride apart) to [t0, t1] ⊂ [0, 1].
-void restrict_line(Vector3* w, int deg, std::size_t stride, double t0, double t1) {
-  auto at = [&](int k) -> Vector3& { return w[static_cast<std::size_t>(k) * stride]; };
-  if (t0 > 0.0) {
-    for (int level = 1; level <= deg; ++level)
-      for (int k = 0; k <= deg - level; ++k) at(k) = (1.0 - t0) * at(k) + t0 * at(k + 1);
-  }
-  const double s = t0 < 1.0 ? (t1 - t0) / (1.0 - t0) : 1.0;
-  if (s < 1.0) {
-    for (int level = 1; level <= deg; ++level)
-      for (int k = deg; k >= level; --k) at(k) = (1.0 - s) * at(k - 1) + s * at(k);
-  }
-}
-
 }  // namespace
 
 BernsteinVectorPatch normal_polynomial(int p, int q, std::span<const HomogeneousPoint> net) {
@@ -130,8 +117,8 @@ BernsteinVectorPatch normal_polynomial(int p, int q, std::span<const Homogeneous
 BernsteinVectorPatch restrict_patch(const BernsteinVectorPatch& f, double u0, double u1, double v0, double v1) {
   BernsteinVectorPatch r = f;
   const std::size_t row = static_cast<std::size_t>(f.dv + 1);
-  for (int j = 0; j <= f.dv; ++j) restrict_line(r.c.data() + j, f.du, row, u0, u1);
-  for (int i = 0; i <= f.du; ++i) restrict_line(r.c.data() + static_cast<std::size_t>(i) * row, f.dv, 1, v0, v1);
+  for (int j = 0; j <= f.dv; ++j) restrict_bezier(r.c.data() + j, f.du, row, u0, u1);
+  for (int i = 0; i <= f.du; ++i) restrict_bezier(r.c.data() + static_cast<std::size_t>(i) * row, f.dv, 1, v0, v1);
   return r;
 }
 

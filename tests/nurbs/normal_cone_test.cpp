@@ -36,9 +36,22 @@ Surface bezier_patch(std::uint64_t seed, int p, int q, double weight_max) {
 
 std::vector<HomogeneousPoint> net_of(const Surface& s) { return s.homogeneous(); }
 
-TEST(NormalCone, NormalPolynomialPointsAlongTheSurfaceNormal) {
-  std::mt19937_64 rng(3);
+// N at random (u, v) points the way of S_u × S_v: same sense, parallel to 1e-10.
+void expect_along_the_normals(const Surface& s, const BernsteinVectorPatch& N, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> t(0.0, 1.0);
+  for (int trial = 0; trial < 100; ++trial) {
+    const double u = t(rng), v = t(rng);
+    const SurfaceD1 d = derivatives_d1(s, u, v);
+    const Vector3 cross = d.Su.cross(d.Sv);
+    const Vector3 n = evaluate_patch(N, u, v);
+    EXPECT_GT(n.dot(cross), 0.0);
+    EXPECT_NEAR(n.normalized().cross(cross.normalized()).norm(), 0.0, 1e-10) << s.p() << "x" << s.q();
+  }
+}
+
+// N = W³ S_u × S_v up to the positive factor p·q dropped from the derivatives.
+TEST(NormalCone, NormalPolynomialPointsAlongTheSurfaceNormal) {
   const int degrees[][2] = {{3, 3}, {2, 3}, {1, 2}, {4, 1}};
   std::uint64_t seed = 40;
   for (const auto& [p, q] : degrees) {
@@ -46,15 +59,7 @@ TEST(NormalCone, NormalPolynomialPointsAlongTheSurfaceNormal) {
     const BernsteinVectorPatch N = normal_polynomial(p, q, net_of(s));
     ASSERT_EQ(N.du, 3 * p - 1);  // rational: weights differ
     ASSERT_EQ(N.dv, 3 * q - 1);
-    for (int trial = 0; trial < 100; ++trial) {
-      const double u = t(rng), v = t(rng);
-      const SurfaceD1 d = derivatives_d1(s, u, v);
-      const Vector3 cross = d.Su.cross(d.Sv);
-      const Vector3 n = evaluate_patch(N, u, v);
-      // Direction and sense: N = W³ S_u × S_v up to the positive factor p·q dropped from the derivatives.
-      EXPECT_GT(n.dot(cross), 0.0);
-      EXPECT_NEAR(n.normalized().cross(cross.normalized()).norm(), 0.0, 1e-10) << p << "x" << q;
-    }
+    expect_along_the_normals(s, N, seed);
   }
 }
 
@@ -64,16 +69,7 @@ TEST(NormalCone, EqualWeightsGiveTheLowerDegreePolynomial) {
   const BernsteinVectorPatch N = normal_polynomial(3, 2, net_of(s));
   ASSERT_EQ(N.du, 5);
   ASSERT_EQ(N.dv, 3);
-  std::mt19937_64 rng(4);
-  std::uniform_real_distribution<double> t(0.0, 1.0);
-  for (int trial = 0; trial < 100; ++trial) {
-    const double u = t(rng), v = t(rng);
-    const SurfaceD1 d = derivatives_d1(s, u, v);
-    const Vector3 cross = d.Su.cross(d.Sv);
-    const Vector3 n = evaluate_patch(N, u, v);
-    EXPECT_GT(n.dot(cross), 0.0);
-    EXPECT_NEAR(n.normalized().cross(cross.normalized()).norm(), 0.0, 1e-10);
-  }
+  expect_along_the_normals(s, N, 4);
 }
 
 TEST(NormalCone, SplitPiecesAreTheRestrictions) {
