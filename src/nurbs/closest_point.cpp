@@ -100,13 +100,30 @@ std::array<double, 2> newton_step(const Iterate& it, double gu, double gv, Activ
 
 namespace {
 
+// How flat f is at the iterate: the smallest λ with det(H − λ JᵀJ) = 0, H the full Hessian of f and JᵀJ its
+// Gauss–Newton part. 1 for a plane; it falls towards 0 as the query nears a centre of curvature (a focal point),
+// where f is flat along some direction and a second minimum may lie close by.
+double flatness(const Iterate& it) {
+  const auto& d = it.d;
+  const double Juu = d.Su.dot(d.Su), Juv = d.Su.dot(d.Sv), Jvv = d.Sv.dot(d.Sv);
+  const double Huu = Juu + it.r.dot(d.Suu), Huv = Juv + it.r.dot(d.Suv), Hvv = Jvv + it.r.dot(d.Svv);
+  const double a = Juu * Jvv - Juv * Juv;
+  if (!(a > 0.0)) return 0.0;
+  const double b = Huu * Jvv + Hvv * Juu - 2.0 * Huv * Juv;
+  const double c = Huu * Hvv - Huv * Huv;
+  const double disc = std::max(0.0, b * b - 4.0 * a * c);
+  return (b - std::sqrt(disc)) / (2.0 * a);
+}
+
 // Projected Newton inside `dom`; `spans` are the knot spans of `dom` when it lies in one (a cell), else -1.
+// `flat`, if given, receives flatness() at the last iterate.
 ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, double v0, const Domain& dom,
-                             int max_iterations, KnotSpans spans) {
+                             int max_iterations, KnotSpans spans, double* flat = nullptr) {
   ClosestPointResult result;
   Iterate it = make_iterate(s, P, std::clamp(u0, dom.u0, dom.u1), std::clamp(v0, dom.v0, dom.v1), spans);
 
   auto finish = [&](ClosestPointStatus status) {
+    if (flat != nullptr) *flat = flatness(it);
     result.status = status;
     result.u = it.u;
     result.v = it.v;
@@ -137,6 +154,7 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
     if (predicted < kClosestPointStepTolerance && it.d.Suu.allFinite() && it.d.Suv.allFinite() && it.d.Svv.allFinite()) {
       // The last, tiny step is taken without the derivatives it would need only to start another: Newton's
       // error after it is of the order of its square, and the point is evaluated where the step lands.
+      if (flat != nullptr) *flat = flatness(it);
       result.status = converged_status;
       result.u = std::clamp(it.u + du, dom.u0, dom.u1);
       result.v = std::clamp(it.v + dv, dom.v0, dom.v1);
@@ -549,6 +567,12 @@ std::vector<Point3> ClosestPointSolver::seed_points_in_region() const {
 
 namespace {
 
+// Where flatness() at the best point is below this, the cells are searched again from kFocalParts² starts each.
+// Measured on BM_ClosestPointAgainstDenseCells: below 0.3 are 23 of the 24 interior results that missed a closer
+// minimum without this second search, and 2.2 % of all its (hard) queries.
+constexpr double kFocalFlatness = 0.3;
+constexpr int kFocalParts = 4;
+
 // Squared distance from q to an axis-aligned box: a lower bound on the distance to anything inside it.
 inline double box_distance_sq(const Point3& q, const Eigen::Array3d& lo, const Eigen::Array3d& hi) {
   const Eigen::Array3d x = q.array();
@@ -557,8 +581,14 @@ inline double box_distance_sq(const Point3& q, const Eigen::Array3d& lo, const E
 
 }  // namespace
 
-void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, ClosestPointResult& best, int& iterations,
-                                     int& starts) const {
+struct ClosestPointSolver::Search {
+  ClosestPointResult best;
+  double flat = 1.0;  // flatness() at the best point (1 until one is found)
+  int iterations = 0;
+  int starts = 0;
+};
+
+void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, int parts, Search& search) const {
   const Seeds& sd = *seeds_;
   const int nv = sd.axis_v.count();
   const int cu = static_cast<int>(k) / nv;
@@ -570,34 +600,47 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, Close
   // in the cell's known span: cheaper to evaluate.
   const KnotSpans spans{sd.axis_u.knot_span[static_cast<std::size_t>(sd.axis_u.span(cu))],
                         sd.axis_v.knot_span[static_cast<std::size_t>(sd.axis_v.span(cv))]};
-  ClosestPointResult r = refine_in(sd.bezier, query, sd.u[k], sd.v[k], cell, options_.max_iterations, spans);
-  ++starts;
-  iterations += r.iterations;
-  const bool on_inner_edge = r.status == ClosestPointStatus::OnBoundary &&
-                             ((r.u == cell.u0 && r.u != whole.u0) || (r.u == cell.u1 && r.u != whole.u1) ||
-                              (r.v == cell.v0 && r.v != whole.v0) || (r.v == cell.v1 && r.v != whole.v1));
-  if (r.status == ClosestPointStatus::OnBoundary && !on_inner_edge) {
-    const bool on_domain_edge = r.u == whole.u0 || r.u == whole.u1 || r.v == whole.v0 || r.v == whole.v1;
-    r.status = on_domain_edge ? ClosestPointStatus::OnBoundary : ClosestPointStatus::Converged;
-  }
-  // Outside the region (a trimmed face) the point does not count: the region's own boundary, searched by the
-  // caller, holds the minimum of the cell's part inside the region unless that part has an interior minimum of
-  // its own which Newton did not reach (accepted, rare).
-  if (region_ != nullptr && !region_->contains(r.u, r.v)) return;
-  if (on_inner_edge && closer(r, best)) {
-    // The minimum lies beyond the edge: follow it (f only decreases on the way).
-    const ClosestPointResult polished = refine_closest_point(surface_, query, r.u, r.v, options_.max_iterations);
-    iterations += polished.iterations;
-    if (polished.ok() && (region_ == nullptr || region_->contains(polished.u, polished.v))) {
-      r = polished;
-    } else if (!polished.ok()) {
-      // Newton cannot settle across the edge: the surface is only C0 there (a crease along a knot line, e.g.
-      // a knot of full multiplicity) and the cell's minimum on it is the minimum of both sides. The
-      // neighbouring cell is searched in its own right, so a closer point beyond would still be found.
-      r.status = ClosestPointStatus::Converged;
+  const double du = (cell.u1 - cell.u0) / parts, dv = (cell.v1 - cell.v0) / parts;
+  for (int a = 0; a < parts; ++a) {
+    for (int b = 0; b < parts; ++b) {
+      const Domain box{a == 0 ? cell.u0 : cell.u0 + a * du, a + 1 == parts ? cell.u1 : cell.u0 + (a + 1) * du,
+                       b == 0 ? cell.v0 : cell.v0 + b * dv, b + 1 == parts ? cell.v1 : cell.v0 + (b + 1) * dv};
+      double flat = 1.0;
+      ClosestPointResult r = refine_in(sd.bezier, query, 0.5 * (box.u0 + box.u1), 0.5 * (box.v0 + box.v1), box,
+                                       options_.max_iterations, spans, &flat);
+      ++search.starts;
+      search.iterations += r.iterations;
+      const bool on_inner_edge = r.status == ClosestPointStatus::OnBoundary &&
+                                 ((r.u == box.u0 && r.u != whole.u0) || (r.u == box.u1 && r.u != whole.u1) ||
+                                  (r.v == box.v0 && r.v != whole.v0) || (r.v == box.v1 && r.v != whole.v1));
+      if (r.status == ClosestPointStatus::OnBoundary && !on_inner_edge) {
+        const bool on_domain_edge = r.u == whole.u0 || r.u == whole.u1 || r.v == whole.v0 || r.v == whole.v1;
+        r.status = on_domain_edge ? ClosestPointStatus::OnBoundary : ClosestPointStatus::Converged;
+      }
+      // Outside the region (a trimmed face) the point does not count: the region's own boundary, searched by the
+      // caller, holds the minimum of the cell's part inside the region unless that part has an interior minimum
+      // of its own which Newton did not reach (accepted, rare).
+      if (region_ != nullptr && !region_->contains(r.u, r.v)) continue;
+      if (on_inner_edge && closer(r, search.best)) {
+        // The minimum lies beyond the edge: follow it (f only decreases on the way).
+        const ClosestPointResult polished = refine_in(surface_, query, r.u, r.v, whole, options_.max_iterations, {}, &flat);
+        search.iterations += polished.iterations;
+        if (polished.ok() && (region_ == nullptr || region_->contains(polished.u, polished.v))) {
+          r = polished;
+        } else if (!polished.ok()) {
+          // Newton cannot settle across the edge: the surface is only C0 there (a crease along a knot line, e.g.
+          // a knot of full multiplicity) and the box's minimum on it is the minimum of both sides. The
+          // neighbouring cell is searched in its own right, so a closer point beyond would still be found.
+          r.status = ClosestPointStatus::Converged;
+          flat = 1.0;
+        }
+      }
+      if (closer(r, search.best)) {
+        search.best = r;
+        search.flat = flat;
+      }
     }
   }
-  if (closer(r, best)) best = r;
 }
 
 ClosestPointResult ClosestPointSolver::closest_point(const Point3& query) const {
@@ -611,9 +654,8 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
     bad.status = ClosestPointStatus::NumericalError;
     return bad;
   }
-  ClosestPointResult best = bound;
-  int iterations = 0;
-  int starts = 0;
+  Search search{bound};
+  const ClosestPointResult& best = search.best;
 
   // One pass depth first over the cell hierarchy, nearer child first, gathers the cells whose boxes are nearer
   // than the bound: the best point given, or the nearest seed on the face seen so far (a point of the surface),
@@ -651,17 +693,25 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   // after it, a cell is searched only if its oriented box is nearer than the best point and its normals allow a
   // critical point there (or it lies on an edge or a crease). The order depends on the query alone.
   std::sort(candidates.begin(), candidates.end());
+  auto may_hold_closer = [&](std::uint32_t k) {
+    const Vector3 q_minus_c = query - sd.seed[k];
+    return sd.box[k].lower_bound(q_minus_c) < best.distance &&
+           sd.box[k].may_hold_critical_point(q_minus_c, sd.cone_tan[k]);
+  };
   for (const auto& [seed_sq, k] : candidates) {
-    if (std::isfinite(best.distance)) {
-      const Vector3 q_minus_c = query - sd.seed[k];
-      if (sd.box[k].lower_bound(q_minus_c) >= best.distance) continue;
-      if (!sd.box[k].may_hold_critical_point(q_minus_c, sd.cone_tan[k])) continue;
-    }
-    search_cell(query, k, best, iterations, starts);
+    if (!std::isfinite(best.distance) || may_hold_closer(k)) search_cell(query, k, 1, search);
   }
-  best.iterations = iterations;
-  best.starts = starts;
-  return best;
+  // Near a centre of curvature the distance is flat: a cell may hold two minima, of which Newton finds one, and
+  // Newton may not settle. There (or after any Newton that did not settle) every cell that could still hold a
+  // closer point is searched again from kFocalParts² starts.
+  if (best.status == ClosestPointStatus::NotConverged || (best.ok() && search.flat < kFocalFlatness)) {
+    for (const auto& [seed_sq, k] : candidates) {
+      if (may_hold_closer(k)) search_cell(query, k, kFocalParts, search);
+    }
+  }
+  search.best.iterations = search.iterations;
+  search.best.starts = search.starts;
+  return search.best;
 }
 
 std::vector<ClosestPointResult> ClosestPointSolver::closest_points(std::span<const Point3> queries) const {
