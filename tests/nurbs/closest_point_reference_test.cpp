@@ -110,40 +110,35 @@ TEST(ClosestPointVsBruteForce, SpiralSheetHasNoWrongAnswersOn10000Points) {
   EXPECT_EQ(wrong, 0);
 }
 
-// Hard cases: tall, wild rational surfaces with points up to 8–10 mm off, where many queries lie near a centre of
-// curvature and the distance has several minima close together. Against brute force (a dense grid refined by
-// OpenCASCADE): no wrong answer by more than 1 µm, and results flagged not-converged are rare.
-TEST(ClosestPointVsBruteForce, NearCentresOfCurvatureNoAnswerIsWrongByAMicrometre) {
-  struct Case {
-    Surface s;
-    double offset;
-  };
-  const Case cases[] = {
-      {testing::random_rational_surface(1001, {.nu = 10, .nv = 9, .height = 30.0, .weight_min = 0.3, .weight_max = 3.0}), 8.0},
-      {testing::random_rational_surface(2003, {.p = 2, .q = 3, .nu = 7, .nv = 9, .height = 40.0}), 10.0}};
-  int total = 0, wrong = 0, flagged = 0;
-  std::uint64_t seed = 500;
-  for (const Case& c : cases) {
-    const ClosestPointSolver solver(c.s);
-    const auto points = testing::random_points_near(c.s, 5000, c.offset, seed++);
-    const auto ours = solver.closest_points(points);
-    const BruteForce brute(c.s, 401, 401);
-    std::vector<double> reference(points.size());
-    tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) { reference[i] = brute.distance(points[i]); });
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      ++total;
-      flagged += !ours[i].ok();
-      if (ours[i].distance > reference[i] + 1e-3) {
-        ++wrong;
-        ADD_FAILURE() << "point " << i << ": ours " << ours[i].distance << " (" << to_string(ours[i].status)
-                      << ") brute force " << reference[i];
-      }
+// A hard case: a tall rational surface (one knot span covering 70 % of v) with points up to 10 mm off, where many
+// queries lie near a centre of curvature and the distance has several minima close together. Against brute force
+// (a dense grid refined by OpenCASCADE): no result reported ok is farther by more than 0.1 µm, and results flagged
+// not-converged are rare. (Without the second search near centres of curvature, two answers here are 0.35 and
+// 1.04 µm off, reported converged.)
+TEST(ClosestPointVsBruteForce, NearCentresOfCurvatureNoTrustedAnswerIsWrong) {
+  const Surface s = testing::random_rational_surface(2000, {.p = 2, .q = 3, .nu = 7, .nv = 9, .height = 40.0});
+  const ClosestPointSolver solver(s);
+  const auto points = testing::random_points_near(s, 10000, 10.0, 60);
+  const auto ours = solver.closest_points(points);
+  const BruteForce brute(s, 201, 201);
+  std::vector<double> reference(points.size());
+  tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) { reference[i] = brute.distance(points[i]); });
+  int wrong = 0, flagged = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!ours[i].ok()) {
+      ++flagged;
+      continue;
+    }
+    if (ours[i].distance > reference[i] + 1e-4) {
+      ++wrong;
+      ADD_FAILURE() << "point " << i << ": ours " << ours[i].distance << " (" << to_string(ours[i].status)
+                    << ") brute force " << reference[i];
     }
   }
   EXPECT_EQ(wrong, 0);
-  EXPECT_LE(flagged, total / 1000);
-  std::cout << "near centres of curvature: " << total << " points, wrong by > 1 um: " << wrong
-            << ", not converged: " << flagged << "\n";
+  EXPECT_LE(flagged, 5);
+  std::cout << "near centres of curvature: " << points.size() << " points, trusted but wrong by > 0.1 um: " << wrong
+            << ", flagged: " << flagged << "\n";
 }
 
 }  // namespace
