@@ -583,7 +583,8 @@ inline double box_distance_sq(const Point3& q, const Eigen::Array3d& lo, const E
 
 struct ClosestPointSolver::Search {
   ClosestPointResult best;
-  double flat = 1.0;  // flatness() at the best point (1 until one is found)
+  double flat = 1.0;  // flatness() at the best point
+  bool found = false;  // the best point is this search's own, not the bound it was given
   int iterations = 0;
   int starts = 0;
 };
@@ -638,6 +639,7 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, int p
       if (closer(r, search.best)) {
         search.best = r;
         search.flat = flat;
+        search.found = true;
       }
     }
   }
@@ -704,7 +706,8 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   // Near a centre of curvature the distance is flat: a cell may hold two minima, of which Newton finds one, and
   // Newton may not settle. There (or after any Newton that did not settle) every cell that could still hold a
   // closer point is searched again from kFocalParts² starts.
-  if (best.status == ClosestPointStatus::NotConverged || (best.ok() && search.flat < kFocalFlatness)) {
+  if (search.found &&
+      (best.status == ClosestPointStatus::NotConverged || (best.ok() && search.flat < kFocalFlatness))) {
     for (const auto& [seed_sq, k] : candidates) {
       if (may_hold_closer(k)) search_cell(query, k, kFocalParts, search);
     }
