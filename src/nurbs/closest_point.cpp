@@ -69,14 +69,29 @@ ActiveSet active_set(const Domain& dom, const Iterate& it, double gu, double gv)
 
 // Newton step on the free parameters; Gauss–Newton (Hessian without the curvature terms, always positive
 // semi-definite) where the full Hessian is not positive definite, e.g. far from a concave region's centre.
-std::array<double, 2> newton_step(const Iterate& it, double gu, double gv, ActiveSet active) {
+// The Hessian of f: J = JᵀJ (Gauss–Newton part, tangents' dot products) and H = J + (S − P)·S''.
+struct Hessian {
+  double Juu, Juv, Jvv, Huu, Huv, Hvv;
+};
+
+Hessian hessian(const Iterate& it) {
   const auto& d = it.d;
-  const double Juu = d.Su.dot(d.Su);
-  const double Juv = d.Su.dot(d.Sv);
-  const double Jvv = d.Sv.dot(d.Sv);
-  const double Huu = Juu + it.r.dot(d.Suu);
-  const double Huv = Juv + it.r.dot(d.Suv);
-  const double Hvv = Jvv + it.r.dot(d.Svv);
+  const double Juu = d.Su.dot(d.Su), Juv = d.Su.dot(d.Sv), Jvv = d.Sv.dot(d.Sv);
+  return {Juu, Juv, Jvv, Juu + it.r.dot(d.Suu), Juv + it.r.dot(d.Suv), Jvv + it.r.dot(d.Svv)};
+}
+
+// How flat f is: the smallest λ with det(H − λ J) = 0. 1 for a plane; it falls towards 0 as the query nears a
+// centre of curvature (a focal point), where f is flat along some direction and a second minimum may lie close by.
+double flatness(const Hessian& h) {
+  const double a = h.Juu * h.Jvv - h.Juv * h.Juv;
+  if (!(a > 0.0)) return 0.0;
+  const double b = h.Huu * h.Jvv + h.Hvv * h.Juu - 2.0 * h.Huv * h.Juv;
+  const double c = h.Huu * h.Hvv - h.Huv * h.Huv;
+  return (b - std::sqrt(std::max(0.0, b * b - 4.0 * a * c))) / (2.0 * a);
+}
+
+std::array<double, 2> newton_step(const Hessian& h, double gu, double gv, ActiveSet active) {
+  const auto [Juu, Juv, Jvv, Huu, Huv, Hvv] = h;
   auto solve1 = [](double h, double j, double g) {
     if (h > 0.0) return -g / h;
     if (j > 0.0) return -g / j;
@@ -100,21 +115,6 @@ std::array<double, 2> newton_step(const Iterate& it, double gu, double gv, Activ
 
 namespace {
 
-// How flat f is at the iterate: the smallest λ with det(H − λ JᵀJ) = 0, H the full Hessian of f and JᵀJ its
-// Gauss–Newton part. 1 for a plane; it falls towards 0 as the query nears a centre of curvature (a focal point),
-// where f is flat along some direction and a second minimum may lie close by.
-double flatness(const Iterate& it) {
-  const auto& d = it.d;
-  const double Juu = d.Su.dot(d.Su), Juv = d.Su.dot(d.Sv), Jvv = d.Sv.dot(d.Sv);
-  const double Huu = Juu + it.r.dot(d.Suu), Huv = Juv + it.r.dot(d.Suv), Hvv = Jvv + it.r.dot(d.Svv);
-  const double a = Juu * Jvv - Juv * Juv;
-  if (!(a > 0.0)) return 0.0;
-  const double b = Huu * Jvv + Hvv * Juu - 2.0 * Huv * Juv;
-  const double c = Huu * Hvv - Huv * Huv;
-  const double disc = std::max(0.0, b * b - 4.0 * a * c);
-  return (b - std::sqrt(disc)) / (2.0 * a);
-}
-
 // Projected Newton inside `dom`; `spans` are the knot spans of `dom` when it lies in one (a cell), else -1.
 // `flat`, if given, receives flatness() at the last iterate.
 ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, double v0, const Domain& dom,
@@ -122,8 +122,15 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
   ClosestPointResult result;
   Iterate it = make_iterate(s, P, std::clamp(u0, dom.u0, dom.u1), std::clamp(v0, dom.v0, dom.v1), spans);
 
+  // The Hessian of the last Newton step, for flatness() at the end: one step before the final iterate at most,
+  // which is close enough for a test of whether the distance is flat there.
+  Hessian h{};
+  bool have_h = false;
+  auto report_flatness = [&] {
+    if (flat != nullptr) *flat = flatness(have_h ? h : hessian(it));
+  };
   auto finish = [&](ClosestPointStatus status) {
-    if (flat != nullptr) *flat = flatness(it);
+    report_flatness();
     result.status = status;
     result.u = it.u;
     result.v = it.v;
@@ -149,12 +156,14 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
     if (u_done && v_done) return finish(converged_status);
 
     ++result.iterations;
-    auto [du, dv] = newton_step(it, gu, gv, active);
+    h = hessian(it);
+    have_h = true;
+    auto [du, dv] = newton_step(h, gu, gv, active);
     const double predicted = (du * it.d.Su + dv * it.d.Sv).norm();
     if (predicted < kClosestPointStepTolerance && it.d.Suu.allFinite() && it.d.Suv.allFinite() && it.d.Svv.allFinite()) {
       // The last, tiny step is taken without the derivatives it would need only to start another: Newton's
       // error after it is of the order of its square, and the point is evaluated where the step lands.
-      if (flat != nullptr) *flat = flatness(it);
+      report_flatness();
       result.status = converged_status;
       result.u = std::clamp(it.u + du, dom.u0, dom.u1);
       result.v = std::clamp(it.v + dv, dom.v0, dom.v1);
@@ -595,53 +604,61 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, int p
   const int cu = static_cast<int>(k) / nv;
   const int cv = static_cast<int>(k) % nv;
   const Domain cell{sd.axis_u.lower(cu), sd.axis_u.upper(cu), sd.axis_v.lower(cv), sd.axis_v.upper(cv)};
-  const Domain whole = surface_.domain();
   // Newton kept inside the cell finds the cell's own minimum; unconstrained, it could run across a knot where the
   // surface is only C0 or C1 into a neighbour's basin and miss a closer point here. It runs on the Bézier form,
   // in the cell's known span: cheaper to evaluate.
   const KnotSpans spans{sd.axis_u.knot_span[static_cast<std::size_t>(sd.axis_u.span(cu))],
                         sd.axis_v.knot_span[static_cast<std::size_t>(sd.axis_v.span(cv))]};
+  if (parts == 1) {
+    search_box(query, cell, spans, sd.u[k], sd.v[k], search);
+    return;
+  }
   const double du = (cell.u1 - cell.u0) / parts, dv = (cell.v1 - cell.v0) / parts;
   for (int a = 0; a < parts; ++a) {
     for (int b = 0; b < parts; ++b) {
       const Domain box{a == 0 ? cell.u0 : cell.u0 + a * du, a + 1 == parts ? cell.u1 : cell.u0 + (a + 1) * du,
                        b == 0 ? cell.v0 : cell.v0 + b * dv, b + 1 == parts ? cell.v1 : cell.v0 + (b + 1) * dv};
-      double flat = 1.0;
-      ClosestPointResult r = refine_in(sd.bezier, query, 0.5 * (box.u0 + box.u1), 0.5 * (box.v0 + box.v1), box,
-                                       options_.max_iterations, spans, &flat);
-      ++search.starts;
-      search.iterations += r.iterations;
-      const bool on_inner_edge = r.status == ClosestPointStatus::OnBoundary &&
-                                 ((r.u == box.u0 && r.u != whole.u0) || (r.u == box.u1 && r.u != whole.u1) ||
-                                  (r.v == box.v0 && r.v != whole.v0) || (r.v == box.v1 && r.v != whole.v1));
-      if (r.status == ClosestPointStatus::OnBoundary && !on_inner_edge) {
-        const bool on_domain_edge = r.u == whole.u0 || r.u == whole.u1 || r.v == whole.v0 || r.v == whole.v1;
-        r.status = on_domain_edge ? ClosestPointStatus::OnBoundary : ClosestPointStatus::Converged;
-      }
-      // Outside the region (a trimmed face) the point does not count: the region's own boundary, searched by the
-      // caller, holds the minimum of the cell's part inside the region unless that part has an interior minimum
-      // of its own which Newton did not reach (accepted, rare).
-      if (region_ != nullptr && !region_->contains(r.u, r.v)) continue;
-      if (on_inner_edge && closer(r, search.best)) {
-        // The minimum lies beyond the edge: follow it (f only decreases on the way).
-        const ClosestPointResult polished = refine_in(surface_, query, r.u, r.v, whole, options_.max_iterations, {}, &flat);
-        search.iterations += polished.iterations;
-        if (polished.ok() && (region_ == nullptr || region_->contains(polished.u, polished.v))) {
-          r = polished;
-        } else if (!polished.ok()) {
-          // Newton cannot settle across the edge: the surface is only C0 there (a crease along a knot line, e.g.
-          // a knot of full multiplicity) and the box's minimum on it is the minimum of both sides. The
-          // neighbouring cell is searched in its own right, so a closer point beyond would still be found.
-          r.status = ClosestPointStatus::Converged;
-          flat = 1.0;
-        }
-      }
-      if (closer(r, search.best)) {
-        search.best = r;
-        search.flat = flat;
-        search.found = true;
-      }
+      search_box(query, box, spans, 0.5 * (box.u0 + box.u1), 0.5 * (box.v0 + box.v1), search);
     }
+  }
+}
+
+void ClosestPointSolver::search_box(const Point3& query, const Domain& box, KnotSpans spans, double u0, double v0,
+                                    Search& search) const {
+  const Domain whole = surface_.domain();
+  double flat = 1.0;
+  ClosestPointResult r = refine_in(seeds_->bezier, query, u0, v0, box, options_.max_iterations, spans, &flat);
+  ++search.starts;
+  search.iterations += r.iterations;
+  const bool on_inner_edge = r.status == ClosestPointStatus::OnBoundary &&
+                             ((r.u == box.u0 && r.u != whole.u0) || (r.u == box.u1 && r.u != whole.u1) ||
+                              (r.v == box.v0 && r.v != whole.v0) || (r.v == box.v1 && r.v != whole.v1));
+  if (r.status == ClosestPointStatus::OnBoundary && !on_inner_edge) {
+    const bool on_domain_edge = r.u == whole.u0 || r.u == whole.u1 || r.v == whole.v0 || r.v == whole.v1;
+    r.status = on_domain_edge ? ClosestPointStatus::OnBoundary : ClosestPointStatus::Converged;
+  }
+  // Outside the region (a trimmed face) the point does not count: the region's own boundary, searched by the
+  // caller, holds the minimum of the box's part inside the region unless that part has an interior minimum of
+  // its own which Newton did not reach (accepted, rare).
+  if (region_ != nullptr && !region_->contains(r.u, r.v)) return;
+  if (on_inner_edge && closer(r, search.best)) {
+    // The minimum lies beyond the edge: follow it (f only decreases on the way).
+    const ClosestPointResult polished = refine_in(surface_, query, r.u, r.v, whole, options_.max_iterations, {}, &flat);
+    search.iterations += polished.iterations;
+    if (polished.ok() && (region_ == nullptr || region_->contains(polished.u, polished.v))) {
+      r = polished;
+    } else if (!polished.ok()) {
+      // Newton cannot settle across the edge: the surface is only C0 there (a crease along a knot line, e.g. a
+      // knot of full multiplicity) and the box's minimum on it is the minimum of both sides. The neighbouring
+      // cell is searched in its own right, so a closer point beyond would still be found.
+      r.status = ClosestPointStatus::Converged;
+      flat = 1.0;
+    }
+  }
+  if (closer(r, search.best)) {
+    search.best = r;
+    search.flat = flat;
+    search.found = true;
   }
 }
 
