@@ -680,15 +680,18 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   // than the bound: the best point given, or the nearest seed on the face seen so far (a point of the surface),
   // whichever is smaller. Squared distances throughout the pass.
   using Candidate = std::pair<double, std::uint32_t>;  // (seed's squared distance, cell)
+  using Entry = std::pair<double, int>;                 // (squared distance to the node's box, node)
   thread_local std::vector<Candidate> candidates;
-  thread_local std::vector<int> stack;
+  thread_local std::vector<Entry> stack;
   candidates.clear();
   stack.clear();
   double bound_sq = best.distance * best.distance;
-  if (sd.nodes[0].in_region && box_distance_sq(query, sd.nodes[0].lo, sd.nodes[0].hi) < bound_sq) stack.push_back(0);
+  if (sd.nodes[0].in_region) stack.emplace_back(box_distance_sq(query, sd.nodes[0].lo, sd.nodes[0].hi), 0);
   while (!stack.empty()) {
-    const Seeds::Node& node = sd.nodes[static_cast<std::size_t>(stack.back())];
+    const auto [lower_sq, at] = stack.back();
     stack.pop_back();
+    if (lower_sq >= bound_sq) continue;  // the bound has shrunk since the node was pushed
+    const Seeds::Node& node = sd.nodes[static_cast<std::size_t>(at)];
     if (node.left < 0) {
       const double seed_sq = (query - sd.seed[node.cell]).squaredNorm();
       if (sd.seed_on_face[node.cell]) bound_sq = std::min(bound_sq, seed_sq);
@@ -701,17 +704,20 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
     const double dl = l.in_region ? box_distance_sq(query, l.lo, l.hi) : kNever;
     const double dr = r.in_region ? box_distance_sq(query, r.lo, r.hi) : kNever;
     if (dl <= dr) {
-      if (dr < bound_sq) stack.push_back(node.right);
-      if (dl < bound_sq) stack.push_back(node.left);
+      if (dr < bound_sq) stack.emplace_back(dr, node.right);
+      if (dl < bound_sq) stack.emplace_back(dl, node.left);
     } else {
-      if (dl < bound_sq) stack.push_back(node.left);
-      if (dr < bound_sq) stack.push_back(node.right);
+      if (dl < bound_sq) stack.emplace_back(dl, node.left);
+      if (dr < bound_sq) stack.emplace_back(dr, node.right);
     }
   }
   // Nearest seed first: without a bound its cell is searched whatever its tests, and its point bounds the rest;
-  // after it, a cell is searched only if its oriented box is nearer than the best point and its normals allow a
-  // critical point there (or it lies on an edge or a crease). The order depends on the query alone.
-  std::sort(candidates.begin(), candidates.end());
+  // after it, in the order gathered, a cell is searched only if its oriented box is nearer than the best point
+  // and its normals allow a critical point there (or it lies on an edge or a crease). The order depends on the
+  // query alone.
+  if (!candidates.empty()) {
+    std::iter_swap(candidates.begin(), std::min_element(candidates.begin(), candidates.end()));
+  }
   auto may_hold_closer = [&](std::uint32_t k) {
     const Vector3 q_minus_c = query - sd.seed[k];
     return sd.box[k].lower_bound(q_minus_c) < best.distance &&
