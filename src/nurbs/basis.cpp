@@ -89,10 +89,6 @@ void derivatives_impl(const KnotVector& U, int span, double u, int n, double* de
   }
 }
 
-}  // namespace
-
-namespace {
-
 // On a Bézier span (its p knots on each side all equal to its ends, as after refinement to Bézier form) the basis
 // functions are the Bernstein polynomials of t = (u − a)/(b − a): from the triangle B^d_i = (1−t) B^{d−1}_i +
 // t B^{d−1}_{i−1}, the k-th derivative is p!/(p−k)!/(b−a)^k times the k-th difference of B^{p−k} (The NURBS Book

@@ -67,8 +67,6 @@ ActiveSet active_set(const Domain& dom, const Iterate& it, double gu, double gv)
           (it.v <= dom.v0 && gv > 0.0) || (it.v >= dom.v1 && gv < 0.0)};
 }
 
-// Newton step on the free parameters; Gauss–Newton (Hessian without the curvature terms, always positive
-// semi-definite) where the full Hessian is not positive definite, e.g. far from a concave region's centre.
 // The Hessian of f: J = JᵀJ (Gauss–Newton part, tangents' dot products) and H = J + (S − P)·S''.
 struct Hessian {
   double Juu, Juv, Jvv, Huu, Huv, Hvv;
@@ -90,6 +88,8 @@ double flatness(const Hessian& h) {
   return (b - std::sqrt(std::max(0.0, b * b - 4.0 * a * c))) / (2.0 * a);
 }
 
+// Newton step on the free parameters; Gauss–Newton (Hessian without the curvature terms, always positive
+// semi-definite) where the full Hessian is not positive definite, e.g. far from a concave region's centre.
 std::array<double, 2> newton_step(const Hessian& h, double gu, double gv, ActiveSet active) {
   const auto [Juu, Juv, Jvv, Huu, Huv, Hvv] = h;
   auto solve1 = [](double h, double j, double g) {
@@ -110,10 +110,6 @@ std::array<double, 2> newton_step(const Hessian& h, double gu, double gv, Active
   // Tangents parallel (a pole): move along each tangent separately.
   return {solve1(Huu, Juu, gu), solve1(Hvv, Jvv, gv)};
 }
-
-}  // namespace
-
-namespace {
 
 // Projected Newton inside `dom`; `spans` are the knot spans of `dom` when it lies in one (a cell), else -1.
 // `flat`, if given, receives flatness() at the last iterate.
@@ -163,18 +159,21 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
     if (predicted < kClosestPointStepTolerance && it.d.Suu.allFinite() && it.d.Suv.allFinite() && it.d.Svv.allFinite()) {
       // The last, tiny step is taken without the derivatives it would need only to start another: Newton's
       // error after it is of the order of its square, and the point is evaluated where the step lands.
+      const double u1 = std::clamp(it.u + du, dom.u0, dom.u1), v1 = std::clamp(it.v + dv, dom.v0, dom.v1);
+      const Point3 S1 = evaluate(s, u1, v1, spans);
+      const double dist1 = (S1 - P).norm();
+      if (!(dist1 <= dist + kClosestPointStepTolerance)) return finish(converged_status);
       report_flatness();
       result.status = converged_status;
-      result.u = std::clamp(it.u + du, dom.u0, dom.u1);
-      result.v = std::clamp(it.v + dv, dom.v0, dom.v1);
-      result.point = evaluate(s, result.u, result.v, spans);
-      result.distance = (result.point - P).norm();
-      if (!(result.distance <= dist + kClosestPointStepTolerance)) return finish(converged_status);
+      result.u = u1;
+      result.v = v1;
+      result.point = S1;
+      result.distance = dist1;
       return result;
     }
     Iterate next = it;
     bool decreased = false;
-    for (int h = 0; h <= kMaxHalvings; ++h) {
+    for (int halving = 0; halving <= kMaxHalvings; ++halving) {
       next = make_iterate(s, P, std::clamp(it.u + du, dom.u0, dom.u1), std::clamp(it.v + dv, dom.v0, dom.v1), spans);
       if (next.f <= it.f + rounding_of_f(P, it)) {
         decreased = true;
@@ -297,7 +296,6 @@ struct CellBox {
 
 // A Bézier patch in homogeneous form: (p+1)·(q+1) points, row i (u) major, over the parameter box `box`.
 struct BezierPatch {
-  int p, q;
   Domain box;
   std::vector<HomogeneousPoint> net;
 };
@@ -387,7 +385,7 @@ BezierPatch cell_patch(const Surface& bezier, const CellAxis& axis_u, const Cell
   const int p = bezier.p();
   const int q = bezier.q();
   const int su = axis_u.span(cu), sv = axis_v.span(cv);
-  BezierPatch patch{p, q, {axis_u.lower(cu), axis_u.upper(cu), axis_v.lower(cv), axis_v.upper(cv)}, {}};
+  BezierPatch patch{{axis_u.lower(cu), axis_u.upper(cu), axis_v.lower(cv), axis_v.upper(cv)}, {}};
   patch.net.reserve(static_cast<std::size_t>((p + 1) * (q + 1)));
   for (int a = 0; a <= p; ++a)
     for (int b = 0; b <= q; ++b) patch.net.push_back(bezier.homogeneous(su * p + a, sv * q + b));
@@ -514,7 +512,7 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
       sd.u[k] = 0.5 * (sd.axis_u.lower(i) + sd.axis_u.upper(i));
       sd.v[k] = 0.5 * (sd.axis_v.lower(j) + sd.axis_v.upper(j));
       const SurfaceD1 d = derivatives_d1(surface_, sd.u[k], sd.v[k]);
-      const UnitNormal un = unit_normal(surface_, sd.u[k], sd.v[k]);
+      const UnitNormal un = unit_normal(surface_, sd.u[k], sd.v[k], d.Su, d.Sv);
       CellBox& box = sd.box[k];
       // Any orthonormal frame gives a valid bound; the tangent frame gives a thin box.
       if (un.status != UnitNormal::Status::Degenerate && d.Su.norm() > 0.0) {
@@ -581,7 +579,7 @@ std::vector<Point3> ClosestPointSolver::seed_points_in_region() const {
   const Seeds& sd = *seeds_;
   std::vector<Point3> out;
   for (std::size_t k = 0; k < sd.seed.size(); ++k) {
-    if (region_ == nullptr || (sd.in_region[k] && region_->contains(sd.u[k], sd.v[k]))) out.push_back(sd.seed[k]);
+    if (sd.seed_on_face[k]) out.push_back(sd.seed[k]);
   }
   return out;
 }
@@ -621,25 +619,21 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, int p
   // in the cell's known span: cheaper to evaluate.
   const KnotSpans spans{sd.axis_u.knot_span[static_cast<std::size_t>(sd.axis_u.span(cu))],
                         sd.axis_v.knot_span[static_cast<std::size_t>(sd.axis_v.span(cv))]};
-  if (parts == 1) {
-    search_box(query, cell, spans, sd.u[k], sd.v[k], search);
-    return;
-  }
   const double du = (cell.u1 - cell.u0) / parts, dv = (cell.v1 - cell.v0) / parts;
   for (int a = 0; a < parts; ++a) {
     for (int b = 0; b < parts; ++b) {
       const Domain box{a == 0 ? cell.u0 : cell.u0 + a * du, a + 1 == parts ? cell.u1 : cell.u0 + (a + 1) * du,
                        b == 0 ? cell.v0 : cell.v0 + b * dv, b + 1 == parts ? cell.v1 : cell.v0 + (b + 1) * dv};
-      search_box(query, box, spans, 0.5 * (box.u0 + box.u1), 0.5 * (box.v0 + box.v1), search);
+      search_box(query, box, spans, search);
     }
   }
 }
 
-void ClosestPointSolver::search_box(const Point3& query, const Domain& box, KnotSpans spans, double u0, double v0,
-                                    Search& search) const {
+void ClosestPointSolver::search_box(const Point3& query, const Domain& box, KnotSpans spans, Search& search) const {
   const Domain whole = surface_.domain();
   double flat = 1.0;
-  ClosestPointResult r = refine_in(seeds_->bezier, query, u0, v0, box, options_.max_iterations, spans, &flat);
+  ClosestPointResult r = refine_in(seeds_->bezier, query, 0.5 * (box.u0 + box.u1), 0.5 * (box.v0 + box.v1), box,
+                                   options_.max_iterations, spans, &flat);
   ++search.starts;
   search.iterations += r.iterations;
   const bool on_inner_edge = r.status == ClosestPointStatus::OnBoundary &&

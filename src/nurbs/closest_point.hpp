@@ -111,8 +111,8 @@ class ClosestPointSolver {
   // Searches seed cell k, cut into parts × parts boxes: Newton kept inside each box, followed beyond it if it stops
   // on an inner edge and is the best so far.
   void search_cell(const Point3& query, std::uint32_t k, int parts, Search& search) const;
-  // Newton from (u0, v0) kept inside `box`, a part of one cell whose knot spans are `spans`.
-  void search_box(const Point3& query, const Domain& box, KnotSpans spans, double u0, double v0, Search& search) const;
+  // Newton from the centre of `box`, a part of one cell whose knot spans are `spans`, kept inside it.
+  void search_box(const Point3& query, const Domain& box, KnotSpans spans, Search& search) const;
 
   Surface surface_;
   ClosestPointOptions options_;

@@ -16,7 +16,6 @@ namespace {
 struct ScalarPatch {
   int du = 0, dv = 0;
   std::vector<double> c;
-  [[nodiscard]] double at(int i, int j) const { return c[static_cast<std::size_t>(i * (dv + 1) + j)]; }
 };
 
 // Binomial coefficients C(n, k) for n up to the normal polynomial's degree, 3·kMaxDegree − 1.
@@ -56,11 +55,6 @@ void accumulate_product(const F& f, const G& g, Op op, std::vector<T>& h) {
     }
 }
 
-struct VectorPatch {
-  int du = 0, dv = 0;
-  std::vector<Vector3> c;
-};
-
 // The u or v derivative's Bernstein coefficients, without the positive factor (degree): every term of N holds
 // exactly one u and one v derivative, so the factors p·q are common to all of N and drop out of its direction.
 template <class P>
@@ -79,8 +73,8 @@ P difference(const P& f, int direction) {
 }
 
 // N += s · (a × b) for scalar s and vector polynomials a, b, all raised to N's degree through the products.
-void add_scaled_cross(const ScalarPatch& s, const VectorPatch& a, const VectorPatch& b, BernsteinVectorPatch& N) {
-  VectorPatch ab{a.du + b.du, a.dv + b.dv, {}};
+void add_scaled_cross(const ScalarPatch& s, const BernsteinVectorPatch& a, const BernsteinVectorPatch& b, BernsteinVectorPatch& N) {
+  BernsteinVectorPatch ab{a.du + b.du, a.dv + b.dv, {}};
   ab.c.assign(static_cast<std::size_t>((ab.du + 1) * (ab.dv + 1)), Vector3::Zero());
   accumulate_product(a, b, [](const Vector3& x, const Vector3& y) -> Vector3 { return x.cross(y); }, ab.c);
   assert(s.du + ab.du == N.du && s.dv + ab.dv == N.dv);
@@ -91,13 +85,13 @@ void add_scaled_cross(const ScalarPatch& s, const VectorPatch& a, const VectorPa
 
 BernsteinVectorPatch normal_polynomial(int p, int q, std::span<const HomogeneousPoint> net) {
   assert(p >= 1 && q >= 1 && net.size() == static_cast<std::size_t>((p + 1) * (q + 1)));
-  VectorPatch A{p, q, {}};
+  BernsteinVectorPatch A{p, q, {}};
   ScalarPatch W{p, q, {}};
   for (const HomogeneousPoint& P : net) {
     A.c.push_back(P.head<3>());
     W.c.push_back(P.w());
   }
-  const VectorPatch Au = difference(A, 0), Av = difference(A, 1);
+  const BernsteinVectorPatch Au = difference(A, 0), Av = difference(A, 1);
   if (std::all_of(W.c.begin(), W.c.end(), [&](double w) { return w == W.c.front(); })) {
     // Equal weights: W_u = W_v = 0 and N = W (A_u × A_v), of degree (2p − 1, 2q − 1); the constant W > 0 drops out.
     BernsteinVectorPatch N{2 * p - 1, 2 * q - 1, {}};
