@@ -6,8 +6,8 @@
 
 #include <random>
 
-#include "cad/locator.hpp"
-#include "cad/plan.hpp"
+#include "probecomp/cad/locator.hpp"
+#include "probecomp/cad/plan.hpp"
 
 namespace {
 

@@ -5,8 +5,8 @@
 
 #include <random>
 
-#include "fitting/least_squares.hpp"
-#include "fitting/offset.hpp"
+#include "probecomp/fitting/least_squares.hpp"
+#include "probecomp/fitting/offset.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace {

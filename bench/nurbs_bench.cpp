@@ -10,8 +10,8 @@
 
 #include <random>
 
-#include "nurbs/closest_point.hpp"
-#include "occt/convert.hpp"
+#include "probecomp/nurbs/closest_point.hpp"
+#include "probecomp/occt/convert.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace {

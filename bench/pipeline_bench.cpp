@@ -13,9 +13,9 @@
 
 #include <random>
 
-#include "cad/locator.hpp"
-#include "compensation/pipeline.hpp"
-#include "simulation/freeform_case.hpp"
+#include "probecomp/cad/locator.hpp"
+#include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/simulation/freeform_case.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace {
@@ -52,7 +52,7 @@ const Input& panel_1m() {
                                         .surface = testing::freeform_panel(7, 20, true), .trim = nullptr, .outward = 1,
                                         .material_known = true, .exact = true});
     const nurbs::Surface& s = i.nominal.faces[0].surface;
-    const registration::RigidTransform T = registration::from_pose({.rx = 1.0, .ry = -1.0, .rz = 0.5, .t = Vector3(1, -1, 1)});
+    const geometry::RigidTransform T = geometry::from_pose({.rx = 1.0, .ry = -1.0, .rz = 0.5, .t = Vector3(1, -1, 1)});
     std::mt19937_64 rng(1);
     std::uniform_real_distribution<double> t(0.02, 0.98);
     std::normal_distribution<double> noise(0.0, 0.002);

@@ -8,8 +8,8 @@
 
 #include <random>
 
-#include "cad/offset_model.hpp"
-#include "registration/routes.hpp"
+#include "probecomp/cad/offset_model.hpp"
+#include "probecomp/registration/routes.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace {
@@ -20,7 +20,7 @@ struct Case {
   cad::Model nominal;
   cad::OffsetModel offset;
   std::vector<Point3> raw;
-  registration::RigidTransform truth;
+  geometry::RigidTransform truth;
 };
 
 const Case& registration_case() {
@@ -34,9 +34,9 @@ const Case& registration_case() {
     // 1° about each axis through the panel's centre, then 1 mm along each axis: the corner of the study's range.
     const nurbs::Domain d = nominal.faces[0].surface.domain();
     const Point3 centre = nurbs::evaluate(nominal.faces[0].surface, 0.5 * (d.u0 + d.u1), 0.5 * (d.v0 + d.v1));
-    const registration::RigidTransform truth =
+    const geometry::RigidTransform truth =
         Eigen::Translation3d(centre + Vector3(1.0, -1.0, 1.0)) *
-        registration::from_pose({.rx = 1.0, .ry = -1.0, .rz = 1.0, .t = Vector3::Zero()}) * Eigen::Translation3d(-centre);
+        geometry::from_pose({.rx = 1.0, .ry = -1.0, .rz = 1.0, .t = Vector3::Zero()}) * Eigen::Translation3d(-centre);
     std::mt19937_64 rng(1);
     std::uniform_real_distribution<double> t(0.02, 0.98);
     std::vector<Point3> raw;

@@ -1,4 +1,4 @@
-#include "cad/locator.hpp"
+#include "probecomp/cad/locator.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <numeric>
 
-#include "nurbs/point_tree.hpp"
+#include "probecomp/geometry/point_tree.hpp"
 
 namespace probecomp::cad {
 
@@ -77,12 +77,12 @@ double box_distance(const BoundingBox& b, const Point3& q) {
 }  // namespace
 
 struct TrimmedFaceLocator::Boundary {
-  nurbs::PointCloud cloud;
+  geometry::PointCloud cloud;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> where;  // (curve, sample index) of each sample
   std::vector<double> gap;   // longest chord from each sample to a neighbouring sample, mm
   std::vector<std::vector<double>> t;  // sample parameters of each boundary curve
   double max_gap = 0.0;      // longest chord of all
-  std::unique_ptr<nurbs::PointTree> tree;
+  std::unique_ptr<geometry::PointTree> tree;
 };
 
 TrimmedFaceLocator::TrimmedFaceLocator(const Face& face)
@@ -128,7 +128,7 @@ TrimmedFaceLocator::TrimmedFaceLocator(const Face& face)
       previous = S;
     }
   }
-  b->tree = std::make_unique<nurbs::PointTree>(3, b->cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  b->tree = std::make_unique<geometry::PointTree>(3, b->cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   b->tree->buildIndex();
   boundary_ = std::move(b);
 }
@@ -201,9 +201,9 @@ ClosestPointResult TrimmedFaceLocator::closest_point(const Point3& query, double
 }
 
 struct ModelLocator::Samples {
-  nurbs::PointCloud cloud;
+  geometry::PointCloud cloud;
   std::vector<int> face;  // the face each sample lies on
-  std::unique_ptr<nurbs::PointTree> tree;
+  std::unique_ptr<geometry::PointTree> tree;
 };
 
 ModelLocator::ModelLocator(const Model& model) : model_(&model) {
@@ -224,7 +224,7 @@ ModelLocator::ModelLocator(const Model& model) : model_(&model) {
       samples_->face.push_back(static_cast<int>(k));
     }
   }
-  samples_->tree = std::make_unique<nurbs::PointTree>(3, samples_->cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  samples_->tree = std::make_unique<geometry::PointTree>(3, samples_->cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   samples_->tree->buildIndex();
 }
 

@@ -1,4 +1,4 @@
-#include "cad/model.hpp"
+#include "probecomp/cad/model.hpp"
 
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_NurbsConvert.hxx>
@@ -45,7 +45,7 @@
 #include <fstream>
 #include <mutex>
 
-#include "occt/convert.hpp"
+#include "probecomp/occt/convert.hpp"
 
 namespace probecomp::cad {
 

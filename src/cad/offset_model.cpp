@@ -1,4 +1,4 @@
-#include "cad/offset_model.hpp"
+#include "probecomp/cad/offset_model.hpp"
 
 #include <tbb/parallel_for.h>
 

@@ -1,4 +1,4 @@
-#include "cad/plan.hpp"
+#include "probecomp/cad/plan.hpp"
 
 #include <algorithm>
 #include <cmath>

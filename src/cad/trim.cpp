@@ -1,4 +1,4 @@
-#include "cad/trim.hpp"
+#include "probecomp/cad/trim.hpp"
 
 #include <algorithm>
 #include <cmath>

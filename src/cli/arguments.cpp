@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "cli/format.hpp"
-#include "io/text.hpp"
+#include "probecomp/io/text.hpp"
 
 namespace probecomp::cli {
 
@@ -66,11 +66,11 @@ std::vector<int> parse_face_list(const std::string& list) {
   return faces;
 }
 
-registration::RigidTransform parse_misalignment(const std::string& spec) {
+geometry::RigidTransform parse_misalignment(const std::string& spec) {
   const std::string what = "--misalign (tx,ty,tz,rx,ry,rz in mm and degrees)";
   const std::vector<double> v = numbers(spec, what);
   if (v.size() != 6) throw std::invalid_argument(what + ": needs 6 numbers, got " + std::to_string(v.size()));
-  return registration::from_pose({.rx = v[3], .ry = v[4], .rz = v[5], .t = Vector3(v[0], v[1], v[2])});
+  return geometry::from_pose({.rx = v[3], .ry = v[4], .rz = v[5], .t = Vector3(v[0], v[1], v[2])});
 }
 
 void add_deformation(const std::string& spec, simulation::Deformation& d) {

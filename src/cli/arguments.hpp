@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "registration/rigid.hpp"
-#include "simulation/deformation.hpp"
+#include "probecomp/geometry/rigid.hpp"
+#include "probecomp/simulation/deformation.hpp"
 
 namespace probecomp::cli {
 
@@ -17,7 +17,7 @@ void check_probe_radius(double r);
 [[nodiscard]] std::vector<int> parse_face_list(const std::string& list);
 
 // "tx,ty,tz,rx,ry,rz" (mm, degrees; T = Translation · Rz · Ry · Rx) → the placement CAD → machine (--misalign).
-[[nodiscard]] registration::RigidTransform parse_misalignment(const std::string& spec);
+[[nodiscard]] geometry::RigidTransform parse_misalignment(const std::string& spec);
 
 // Adds one --deform specification to `d`:
 //   bump:X,Y,Z,A,W              Gaussian bump at (X,Y,Z), amplitude A (mm, < 0 a dent), width W (its σ, mm)

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "simulation/measure.hpp"
-#include "studies/freeform_study.hpp"
-#include "studies/registration_study.hpp"
+#include "probecomp/simulation/measure.hpp"
+#include "probecomp/studies/freeform_study.hpp"
+#include "probecomp/studies/registration_study.hpp"
 
 namespace probecomp::cli {
 

@@ -6,15 +6,15 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "cad/model.hpp"
+#include "probecomp/cad/model.hpp"
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "cli/format.hpp"
-#include "compensation/pipeline.hpp"
-#include "io/dmis.hpp"
-#include "io/point_table.hpp"
-#include "io/text.hpp"
-#include "studies/freeform_study.hpp"
+#include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/io/dmis.hpp"
+#include "probecomp/io/point_table.hpp"
+#include "probecomp/io/text.hpp"
+#include "probecomp/studies/freeform_study.hpp"
 
 namespace probecomp::cli {
 
@@ -111,7 +111,7 @@ std::string json_stats(const compensation::CompensationResult& r, double read_se
     const compensation::FaceReport& x = r.faces[f];
     j << (f ? ",\n   " : "\n   ") << "{\"face\": " << x.face << ", \"points\": " << x.points
       << ", \"fitted\": " << (x.fitted ? "true" : "false") << ", \"material_side\": \""
-      << registration::to_string(x.material) << "\"";
+      << cad::to_string(x.material) << "\"";
     if (x.fitted) {
       j << ", \"control_points\": " << x.control_points << ", \"refinement_rounds\": " << x.rounds
         << ", \"rms_residual\": " << fmt("%.9g", x.rms) << ", \"max_residual\": " << fmt("%.9g", x.max_residual)

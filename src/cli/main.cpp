@@ -13,14 +13,14 @@
 #include <string>
 #include <vector>
 
-#include "cad/locator.hpp"
-#include "cad/model.hpp"
-#include "cad/plan.hpp"
+#include "probecomp/cad/locator.hpp"
+#include "probecomp/cad/model.hpp"
+#include "probecomp/cad/plan.hpp"
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "cli/format.hpp"
-#include "io/point_table.hpp"
-#include "version.hpp"
+#include "probecomp/io/point_table.hpp"
+#include "probecomp/version.hpp"
 
 namespace {
 
@@ -154,7 +154,7 @@ int main(int argc, char** argv) {
       "probecomp: CAD-based contact-probe radius compensation for CMM data.\n"
       "Turns raw probe-centre points into contact points and deviations using the part's NURBS model.",
       "probecomp"};
-  app.set_version_flag("--version", std::string("probecomp ") + probecomp::kVersion);
+  app.set_version_flag("--version", "probecomp " + probecomp::version());
   app.require_subcommand(0, 1);
 
   std::string part, points, output, faces;

@@ -7,15 +7,15 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "cad/locator.hpp"
-#include "cad/model.hpp"
-#include "cad/plan.hpp"
+#include "probecomp/cad/locator.hpp"
+#include "probecomp/cad/model.hpp"
+#include "probecomp/cad/plan.hpp"
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "cli/format.hpp"
-#include "io/dmis.hpp"
-#include "io/point_table.hpp"
-#include "simulation/measure.hpp"
+#include "probecomp/io/dmis.hpp"
+#include "probecomp/io/point_table.hpp"
+#include "probecomp/simulation/measure.hpp"
 
 namespace probecomp::cli {
 
@@ -105,8 +105,8 @@ int run_simulate(const SimulateArgs& a) {
   if (!(a.noise >= 0.0)) throw std::invalid_argument("--noise must be a non-negative number of mm");
   simulation::Deformation deformation;
   for (const std::string& spec : a.deform) add_deformation(spec, deformation);
-  const registration::RigidTransform placement =
-      a.misalign.empty() ? registration::RigidTransform::Identity() : parse_misalignment(a.misalign);
+  const geometry::RigidTransform placement =
+      a.misalign.empty() ? geometry::RigidTransform::Identity() : parse_misalignment(a.misalign);
   const cad::Model nominal = cad::read_model(a.cad);
   const std::vector<simulation::ProgrammedPoint> plan = programmed_points(a, nominal);
 

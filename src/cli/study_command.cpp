@@ -10,11 +10,11 @@
 
 #include "cli/commands.hpp"
 #include "cli/format.hpp"
-#include "io/point_table.hpp"
-#include "studies/analytic_cylinder.hpp"
-#include "studies/cylinder_study.hpp"
-#include "studies/freeform_study.hpp"
-#include "studies/registration_study.hpp"
+#include "probecomp/io/point_table.hpp"
+#include "probecomp/studies/analytic_cylinder.hpp"
+#include "probecomp/studies/cylinder_study.hpp"
+#include "probecomp/studies/freeform_study.hpp"
+#include "probecomp/studies/registration_study.hpp"
 
 namespace probecomp::cli {
 

@@ -1,4 +1,4 @@
-#include "compensation/contact.hpp"
+#include "probecomp/compensation/contact.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -1,7 +1,9 @@
-#include "compensation/conventional.hpp"
+#include "probecomp/compensation/conventional.hpp"
 
 #include <limits>
 #include <stdexcept>
+
+#include "probecomp/cad/locator.hpp"
 
 namespace probecomp::compensation {
 
@@ -18,6 +20,15 @@ std::vector<Point3> conventional_contact_points(std::span<const Point3> centres,
                  : Point3::Constant(std::numeric_limits<double>::quiet_NaN());
   }
   return out;
+}
+
+registration::RegistrationResult register_conventional(const cad::Model& nominal, std::span<const Point3> raw_centres,
+                                         std::span<const Vector3> approach_normals, double probe_radius,
+                                         const registration::RegistrationOptions& options) {
+  const std::vector<Point3> contacts =
+      conventional_contact_points(raw_centres, approach_normals, probe_radius);
+  const cad::ModelLocator locator(nominal);
+  return registration::register_points(locator, contacts, options);
 }
 
 }  // namespace probecomp::compensation

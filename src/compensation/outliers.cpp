@@ -1,4 +1,4 @@
-#include "compensation/outliers.hpp"
+#include "probecomp/compensation/outliers.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -8,13 +8,15 @@
 #include <algorithm>
 #include <cmath>
 
-#include "nurbs/point_tree.hpp"
+#include "probecomp/geometry/point_tree.hpp"
+#include "probecomp/geometry/statistics.hpp"
 
 namespace probecomp::compensation {
 
 namespace {
 
-constexpr double kMadToSigma = 1.4826;
+using geometry::kMadToSigma;
+using geometry::upper_median_in_place;
 // Neighbours departing from the first local fit by more than this many times the median departure are left out
 // of the second (an outlier among the neighbours must not bend the prediction).
 constexpr double kRefitCut = 3.0;
@@ -22,13 +24,6 @@ constexpr double kRefitCut = 3.0;
 // Relative ridge on the local quadratic's normal equations (of their trace): far below any determined
 // coefficient's weight, enough to make a rank-deficient neighbourhood solvable.
 constexpr double kRidge = 1e-10;
-
-double median_of(std::vector<double>& x) {
-  if (x.empty()) return 0.0;
-  const std::size_t m = x.size() / 2;
-  std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(m), x.end());
-  return x[m];
-}
 
 }  // namespace
 
@@ -39,8 +34,8 @@ LocalOutliers local_outliers(std::span<const Point3> points, std::span<const dou
   const std::size_t k = static_cast<std::size_t>(options.neighbours) + 1;  // the point itself comes back too
   if (points.size() < k) return out;
   out.nearest.assign(points.size(), 0);
-  nurbs::PointCloud cloud{std::vector<Point3>(points.begin(), points.end())};
-  nurbs::PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  geometry::PointCloud cloud{std::vector<Point3>(points.begin(), points.end())};
+  geometry::PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
 
   std::vector<double> departure(points.size(), 0.0);
@@ -89,7 +84,7 @@ LocalOutliers local_outliers(std::span<const Point3> points, std::span<const dou
       miss.resize(phi.size());
       for (std::size_t a = 0; a < phi.size(); ++a) miss[a] = std::abs(phi[a].dot(c) - value[a]);
       scratch = miss;
-      const double cut = kRefitCut * median_of(scratch);
+      const double cut = kRefitCut * upper_median_in_place(scratch);
       int kept = 0;
       for (std::size_t a = 0; a < phi.size(); ++a) {
         use[a] = miss[a] <= cut;
@@ -99,9 +94,9 @@ LocalOutliers local_outliers(std::span<const Point3> points, std::span<const dou
       departure[i] = residuals[i] - c(0);
     }
   });
-  std::vector<double> size(departure.size());  // |departure|, then partly reordered by median_of
+  std::vector<double> size(departure.size());  // |departure|, then partly reordered by upper_median_in_place
   for (std::size_t i = 0; i < departure.size(); ++i) size[i] = std::abs(departure[i]);
-  out.scale = kMadToSigma * median_of(size);
+  out.scale = kMadToSigma * upper_median_in_place(size);
   const double bound = std::max(options.sigmas * out.scale, options.min_departure);
   for (std::size_t i = 0; i < departure.size(); ++i) {
     out.outlier[i] = std::abs(departure[i]) > bound;

@@ -1,4 +1,4 @@
-#include "compensation/pipeline.hpp"
+#include "probecomp/compensation/pipeline.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -8,13 +8,13 @@
 #include <map>
 #include <stdexcept>
 
-#include "nurbs/degree_elevation.hpp"
-#include "cad/locator.hpp"
-#include "cad/offset_model.hpp"
-#include "compensation/contact.hpp"
-#include "compensation/conventional.hpp"
-#include "compensation/outliers.hpp"
-#include "nurbs/closest_point.hpp"
+#include "probecomp/nurbs/degree_elevation.hpp"
+#include "probecomp/cad/locator.hpp"
+#include "probecomp/cad/offset_model.hpp"
+#include "probecomp/compensation/contact.hpp"
+#include "probecomp/compensation/conventional.hpp"
+#include "probecomp/compensation/outliers.hpp"
+#include "probecomp/nurbs/closest_point.hpp"
 
 namespace probecomp::compensation {
 
@@ -23,7 +23,7 @@ namespace {
 // The fit starts from the registered offset face. A degree-1 direction (a plane, a cylinder's rulings) could
 // follow a deformation only by creases at the knots refinement inserts, so it is raised to degree 3 first
 // (same shape and parameters, so the registration's (u, v) still hold).
-nurbs::Surface fit_start(const nurbs::Surface& offset_face, const registration::RigidTransform& T) {
+nurbs::Surface fit_start(const nurbs::Surface& offset_face, const geometry::RigidTransform& T) {
   nurbs::Surface s = nurbs::transformed(offset_face, T);
   if (s.p() < 2) s = nurbs::elevate_degree_u(s, 3 - s.p());
   if (s.q() < 2) s = nurbs::elevate_degree_v(s, 3 - s.q());
@@ -68,7 +68,7 @@ std::vector<Point3> spread_subset(std::span<const Point3> points, std::size_t k)
 // Stops the run when the points are nowhere near the model (wrong file, frame or unit): ICP would otherwise
 // "align" them to whatever is nearest.
 void check_points_near(const cad::ModelLocator& locator, std::span<const Point3> points,
-                       const registration::RigidTransform& initial, double fraction) {
+                       const geometry::RigidTransform& initial, double fraction) {
   BoundingBox box;
   for (const cad::Face& f : locator.model().faces) {
     const BoundingBox b = nurbs::bounding_box(f.surface);
@@ -78,7 +78,7 @@ void check_points_near(const cad::ModelLocator& locator, std::span<const Point3>
   // 257 points give the median to within a few per cent of the distribution: plenty for a gross check.
   std::vector<Point3> subset = spread_subset(points, 257);
   if (subset.empty()) throw std::invalid_argument("no finite points to compensate");
-  const registration::RigidTransform to_cad = initial.inverse();
+  const geometry::RigidTransform to_cad = initial.inverse();
   for (Point3& p : subset) p = to_cad * p;
   const std::vector<cad::ModelPoint> feet = locator.closest_points(subset);
   std::vector<double> d;
@@ -182,7 +182,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   stage("material side", 0.0);
   auto t0 = Clock::now();
   cad::Model work = model;
-  out.material = registration::decide_material_side(work, raw, approach_normals, options.registration.initial);
+  out.material = cad::decide_material_side(work, raw, approach_normals, options.registration.initial);
   out.seconds.material_side = since(t0);
 
   stage("offset model", 0.05);
@@ -196,7 +196,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   check_points_near(locator, raw, options.registration.initial, options.max_initial_distance_fraction);
   out.registration = registration::register_to_offset_model(offset, locator, raw, options.registration);
   check_registration(out.registration);
-  const registration::RigidTransform T = out.registration.transform;
+  const geometry::RigidTransform T = out.registration.transform;
   out.seconds.registration = since(t0);
 
   // Points by face (their correspondences); edge points are compensated towards the edge, never fitted.
@@ -346,7 +346,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   t0 = Clock::now();
   // Newton from the correspondence's (u, v) (nominal and offset faces share their parametrisation), with the
   // face's global search where Newton fails.
-  const registration::RigidTransform to_cad = T.inverse();
+  const geometry::RigidTransform to_cad = T.inverse();
   std::vector<char> retry(raw.size(), 0);
   tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
     CompensatedPoint& c = out.points[k];

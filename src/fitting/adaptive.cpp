@@ -1,4 +1,4 @@
-#include "fitting/adaptive.hpp"
+#include "probecomp/fitting/adaptive.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -8,9 +8,10 @@
 #include <cstdint>
 #include <limits>
 
-#include "fitting/spans.hpp"
-#include "nurbs/closest_point.hpp"
-#include "nurbs/point_tree.hpp"
+#include "probecomp/fitting/spans.hpp"
+#include "probecomp/nurbs/closest_point.hpp"
+#include "probecomp/geometry/point_tree.hpp"
+#include "probecomp/geometry/statistics.hpp"
 
 namespace probecomp::fitting {
 
@@ -18,8 +19,8 @@ namespace {
 
 using nurbs::Surface;
 
-// The MAD of a normal distribution is 0.6745 σ.
-constexpr double kMadToSigma = 1.4826;
+using geometry::kMadToSigma;
+using geometry::median_in_place;
 
 // Signed residual of each point along the fit's unit normal at its parameters.
 std::vector<double> normal_residuals(const Surface& s, std::span<const Point3> points,
@@ -58,21 +59,13 @@ int span_of(const std::vector<double>& breaks, double t) {
   return std::clamp(s, 0, static_cast<int>(breaks.size()) - 2);
 }
 
-double median_in_place(std::vector<double>& x) {
-  const std::size_t m = x.size() / 2;
-  std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(m), x.end());
-  double med = x[m];
-  if (x.size() % 2 == 0) med = 0.5 * (med + *std::max_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(m)));
-  return med;
-}
-
 }  // namespace
 
 std::vector<std::uint32_t> nearest_neighbours(std::span<const Point3> points) {
   std::vector<std::uint32_t> out(points.size(), 0);
   if (points.size() < 2) return out;
-  nurbs::PointCloud cloud{std::vector<Point3>(points.begin(), points.end())};
-  nurbs::PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  geometry::PointCloud cloud{std::vector<Point3>(points.begin(), points.end())};
+  geometry::PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const auto& range) {
     for (std::size_t pos = range.begin(); pos != range.end(); ++pos) {

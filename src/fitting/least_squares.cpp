@@ -1,4 +1,4 @@
-#include "fitting/least_squares.hpp"
+#include "probecomp/fitting/least_squares.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "nurbs/basis.hpp"
+#include "probecomp/nurbs/basis.hpp"
 
 namespace probecomp::fitting {
 

@@ -1,4 +1,4 @@
-#include "fitting/offset.hpp"
+#include "probecomp/fitting/offset.hpp"
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
@@ -10,10 +10,10 @@
 #include <limits>
 #include <optional>
 
-#include "fitting/least_squares.hpp"
-#include "nurbs/basis.hpp"
-#include "fitting/spans.hpp"
-#include "nurbs/knot_insertion.hpp"
+#include "probecomp/fitting/least_squares.hpp"
+#include "probecomp/nurbs/basis.hpp"
+#include "probecomp/fitting/spans.hpp"
+#include "probecomp/nurbs/knot_insertion.hpp"
 
 namespace probecomp::fitting {
 

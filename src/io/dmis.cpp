@@ -1,4 +1,4 @@
-#include "io/dmis.hpp"
+#include "probecomp/io/dmis.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -8,7 +8,7 @@
 #include <optional>
 #include <sstream>
 
-#include "io/text.hpp"
+#include "probecomp/io/text.hpp"
 
 namespace probecomp::io {
 

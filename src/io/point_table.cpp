@@ -1,4 +1,4 @@
-#include "io/point_table.hpp"
+#include "probecomp/io/point_table.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "io/text.hpp"
+#include "probecomp/io/text.hpp"
 
 namespace probecomp::io {
 

@@ -1,4 +1,4 @@
-#include "nurbs/basis.hpp"
+#include "probecomp/nurbs/basis.hpp"
 
 #include <algorithm>
 

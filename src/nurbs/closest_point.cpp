@@ -1,4 +1,4 @@
-#include "nurbs/closest_point.hpp"
+#include "probecomp/nurbs/closest_point.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -8,8 +8,8 @@
 #include <cmath>
 #include <limits>
 
-#include "nurbs/de_casteljau.hpp"
-#include "nurbs/normal_cone.hpp"
+#include "probecomp/nurbs/de_casteljau.hpp"
+#include "probecomp/nurbs/normal_cone.hpp"
 
 namespace probecomp::nurbs {
 

@@ -1,9 +1,9 @@
-#include "nurbs/curve.hpp"
+#include "probecomp/nurbs/curve.hpp"
 
 #include <string>
 
-#include "nurbs/basis.hpp"
-#include "nurbs/knot_insertion.hpp"
+#include "probecomp/nurbs/basis.hpp"
+#include "probecomp/nurbs/knot_insertion.hpp"
 
 namespace probecomp::nurbs {
 

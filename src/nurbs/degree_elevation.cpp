@@ -1,4 +1,4 @@
-#include "nurbs/degree_elevation.hpp"
+#include "probecomp/nurbs/degree_elevation.hpp"
 
 #include <string>
 

@@ -1,4 +1,4 @@
-#include "nurbs/knot_insertion.hpp"
+#include "probecomp/nurbs/knot_insertion.hpp"
 
 #include <algorithm>
 #include <sstream>

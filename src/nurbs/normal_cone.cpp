@@ -1,12 +1,12 @@
-#include "nurbs/normal_cone.hpp"
+#include "probecomp/nurbs/normal_cone.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cassert>
 #include <cmath>
 
-#include "nurbs/de_casteljau.hpp"
-#include "nurbs/knot_vector.hpp"
+#include "probecomp/nurbs/de_casteljau.hpp"
+#include "probecomp/nurbs/knot_vector.hpp"
 
 namespace probecomp::nurbs {
 

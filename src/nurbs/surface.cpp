@@ -1,11 +1,11 @@
-#include "nurbs/surface.hpp"
+#include "probecomp/nurbs/surface.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 
-#include "nurbs/basis.hpp"
-#include "nurbs/knot_insertion.hpp"
+#include "probecomp/nurbs/basis.hpp"
+#include "probecomp/nurbs/knot_insertion.hpp"
 
 namespace probecomp::nurbs {
 

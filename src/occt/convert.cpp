@@ -1,4 +1,4 @@
-#include "occt/convert.hpp"
+#include "probecomp/occt/convert.hpp"
 
 #include <TColStd_Array1OfInteger.hxx>
 #include <TColStd_Array1OfReal.hxx>

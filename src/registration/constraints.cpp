@@ -1,4 +1,4 @@
-#include "registration/constraints.hpp"
+#include "probecomp/registration/constraints.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
@@ -50,20 +50,20 @@ Constraints analyse_constraints(const Eigen::SelfAdjointEigenSolver<Eigen::Matri
   return c;
 }
 
-RigidTransform motion_about(const Twist& delta, const Point3& centre, double length) {
-  Twist xi;
+geometry::RigidTransform motion_about(const geometry::Twist& delta, const Point3& centre, double length) {
+  geometry::Twist xi;
   xi.head<3>() = delta.head<3>() / length;
   xi.tail<3>().setZero();
-  const RigidTransform R = from_twist(xi);
-  RigidTransform T = RigidTransform::Identity();
+  const geometry::RigidTransform R = geometry::from_twist(xi);
+  geometry::RigidTransform T = geometry::RigidTransform::Identity();
   T.linear() = R.linear();
   T.translation() = centre - R.linear() * centre + delta.tail<3>();
   return T;
 }
 
-Twist scaled_twist_of(const RigidTransform& motion, const Point3& centre, double length) {
-  const Twist xi = to_twist(motion);
-  Twist delta;
+geometry::Twist scaled_twist_of(const geometry::RigidTransform& motion, const Point3& centre, double length) {
+  const geometry::Twist xi = geometry::to_twist(motion);
+  geometry::Twist delta;
   delta.head<3>() = xi.head<3>() * length;
   delta.tail<3>() = motion * centre - centre;
   return delta;

@@ -1,4 +1,6 @@
-#include "registration/icp.hpp"
+#include "probecomp/registration/icp.hpp"
+
+#include "probecomp/geometry/statistics.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -12,7 +14,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "nurbs/point_tree.hpp"
+#include "probecomp/geometry/point_tree.hpp"
 
 namespace probecomp::registration {
 
@@ -37,7 +39,7 @@ namespace {
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
 
 struct Step {
-  RigidTransform motion = RigidTransform::Identity();  // in the CAD frame, applied to the points
+  geometry::RigidTransform motion = geometry::RigidTransform::Identity();  // in the CAD frame, applied to the points
   Constraints constraints;
   bool finite = true;
 };
@@ -60,15 +62,15 @@ Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::Mod
   // does not depend on the thread count.
   constexpr std::size_t kChunks = 64;
   std::array<Matrix6, kChunks> Hc;
-  std::array<Twist, kChunks> gc;
+  std::array<geometry::Twist, kChunks> gc;
   tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t chunk) {
     Matrix6 Hp = Matrix6::Zero();
-    Twist gp = Twist::Zero();
+    geometry::Twist gp = geometry::Twist::Zero();
     const std::size_t first = x.size() * chunk / kChunks, last = x.size() * (chunk + 1) / kChunks;
     for (std::size_t i = first; i < last; ++i) {
       if (w[i] == 0.0) continue;
       const Vector3& n = feet[i].normal;
-      Twist J;
+      geometry::Twist J;
       J.head<3>() = (x[i] - c).cross(n) / L;
       J.tail<3>() = n;
       Hp.selfadjointView<Eigen::Lower>().rankUpdate(J, w[i]);
@@ -78,7 +80,7 @@ Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::Mod
     gc[chunk] = gp;
   });
   Matrix6 H = Matrix6::Zero();
-  Twist g = Twist::Zero();
+  geometry::Twist g = geometry::Twist::Zero();
   for (std::size_t chunk = 0; chunk < kChunks; ++chunk) {
     H += Hc[chunk];
     g += gc[chunk];
@@ -88,11 +90,11 @@ Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::Mod
   step.constraints = analyse_constraints(eig, c, L);
   const int free = 6 - step.constraints.fixed;
 
-  Twist delta = Twist::Zero();
+  geometry::Twist delta = geometry::Twist::Zero();
   if (metric == Metric::PointToPlane) {
     // Gauss–Newton on the fixed motions only: δ = −Σ_k (e_k·g / λ_k) e_k over the constrained eigenvectors.
     for (int k = free; k < 6; ++k) {
-      const Twist e = eig.eigenvectors().col(k);
+      const geometry::Twist e = eig.eigenvectors().col(k);
       delta -= (e.dot(g) / eig.eigenvalues()(k)) * e;
     }
   } else {
@@ -114,7 +116,7 @@ Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::Mod
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
     Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
     D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
-    RigidTransform M = RigidTransform::Identity();
+    geometry::RigidTransform M = geometry::RigidTransform::Identity();
     M.linear() = svd.matrixV() * D * svd.matrixU().transpose();
     M.translation() = cq - M.linear() * cx;
     delta = scaled_twist_of(M, c, L);
@@ -161,7 +163,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   RegistrationResult result;
   const std::size_t n = machine_points.size();
   const std::size_t needed = options.metric == Metric::PointToPlane ? 6 : 3;
-  RigidTransform to_cad = options.initial.inverse();
+  geometry::RigidTransform to_cad = options.initial.inverse();
 
   std::vector<Point3> x(n);
   std::vector<cad::ModelPoint> feet = std::move(hints);
@@ -190,7 +192,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
       w[i] = use[i] ? 1.0 : 0.0;
       if (use[i]) used_r.push_back(r[i]);
     }
-    scale = robust_scale(used_r, options.robust.min_scale);
+    scale = geometry::robust_scale(used_r, options.robust.min_scale);
     for (std::size_t i = 0; i < n; ++i) {
       if (w[i] != 0.0) w[i] = robust_weight(options.robust.loss, r[i], scale);
     }
@@ -198,7 +200,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   };
 
   result.status = Status::MaxIterations;
-  Twist previous_step = Twist::Zero();
+  geometry::Twist previous_step = geometry::Twist::Zero();
   bool exact = true;  // the correspondences of this pass are exact closest points
   Search next = Search::Local;
   const bool hinted_start = !feet.empty();
@@ -245,19 +247,19 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
     // noise, against quadratic convergence without weights). When two updates agree so, the remaining ones sum
     // to ρ/(1 − ρ) of the last, and taking them at once (Aitken's extrapolation along the same screw) saves the
     // iterations; the next pass corrects what the extrapolation misses. 1M points: 6 passes → 3.
-    RigidTransform motion = step.motion;
-    const Twist xi = to_twist(step.motion);
-    Twist scaled = xi;
+    geometry::RigidTransform motion = step.motion;
+    const geometry::Twist xi = geometry::to_twist(step.motion);
+    geometry::Twist scaled = xi;
     scaled.head<3>() *= length;  // rotation as the motion it gives at the data's radius, comparable with mm
     if (previous_step.norm() > 0.0 && scaled.norm() > 0.0) {
       const double ratio = scaled.norm() / previous_step.norm();
       const double cosine = scaled.dot(previous_step) / (scaled.norm() * previous_step.norm());
-      if (cosine > kAitkenCosine && ratio < kAitkenMaxRatio) motion = from_twist(xi / (1.0 - ratio));
+      if (cosine > kAitkenCosine && ratio < kAitkenMaxRatio) motion = geometry::from_twist(xi / (1.0 - ratio));
     }
     previous_step = scaled;
     to_cad = motion * to_cad;
     // The update acts on the points in the CAD frame; their box moves with them, so bound about its image.
-    const double moved = largest_motion(motion, centre, max_radius);
+    const double moved = geometry::largest_motion(motion, centre, max_radius);
     centre = motion * centre;
     centroid = motion * centroid;
     const double tolerance =
@@ -329,9 +331,9 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
   if (coarse.status == Status::TooFewPoints || coarse.status == Status::NumericalError) {
     return iterate(model, machine_points, options, {});
   }
-  nurbs::PointCloud cloud;
+  geometry::PointCloud cloud;
   cloud.points = subset;
-  nurbs::PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  geometry::PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
   std::vector<cad::ModelPoint> hints(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {

@@ -1,4 +1,4 @@
-#include "registration/robust.hpp"
+#include "probecomp/registration/robust.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,16 +14,6 @@ const char* to_string(RobustLoss loss) {
     case RobustLoss::Trimmed: return "trimmed";
   }
   return "?";
-}
-
-double robust_scale(std::span<const double> residuals, double min_scale) {
-  if (residuals.empty()) return min_scale;
-  std::vector<double> a(residuals.size());
-  std::transform(residuals.begin(), residuals.end(), a.begin(), [](double r) { return std::abs(r); });
-  // The upper median for an even count: nth_element is deterministic for a given input order.
-  const auto mid = a.begin() + static_cast<std::ptrdiff_t>(a.size() / 2);
-  std::nth_element(a.begin(), mid, a.end());
-  return std::max(1.4826 * *mid, min_scale);
 }
 
 double robust_weight(RobustLoss loss, double r, double scale) {

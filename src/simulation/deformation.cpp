@@ -1,4 +1,4 @@
-#include "simulation/deformation.hpp"
+#include "probecomp/simulation/deformation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,9 +6,9 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "fitting/offset.hpp"
-#include "fitting/spans.hpp"
-#include "nurbs/degree_elevation.hpp"
+#include "probecomp/fitting/offset.hpp"
+#include "probecomp/fitting/spans.hpp"
+#include "probecomp/nurbs/degree_elevation.hpp"
 
 namespace probecomp::simulation {
 

@@ -1,4 +1,4 @@
-#include "simulation/freeform_case.hpp"
+#include "probecomp/simulation/freeform_case.hpp"
 
 #include <cmath>
 #include <numbers>
@@ -44,7 +44,7 @@ FreeformCase paper_freeform_case(bool reversed) {
   // its flanks slope up to 1/2.5 · e^(−1/2) = 0.24, i.e. 13.6°; the nominal spans (10-18 mm) cannot follow it.
   c.deformation.bumps.push_back({nurbs::evaluate(s, 0.3, 0.4), 0.25, 12.0});
   c.deformation.bumps.push_back({nurbs::evaluate(s, 0.64, 0.62), -1.0, 2.5});
-  c.placement = registration::from_pose({.rx = 0.0, .ry = 1.5, .rz = 0.0, .t = Vector3(0.0, 0.0, 0.2)});
+  c.placement = geometry::from_pose({.rx = 0.0, .ry = 1.5, .rz = 0.0, .t = Vector3(0.0, 0.0, 0.2)});
   return c;
 }
 

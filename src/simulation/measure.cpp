@@ -1,4 +1,4 @@
-#include "simulation/measure.hpp"
+#include "probecomp/simulation/measure.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -117,7 +117,7 @@ std::vector<Touch> simulate_touches(const cad::ModelLocator& actual, std::span<c
 }
 
 cad::Model actual_model(const cad::Model& nominal, const Deformation& deformation,
-                        const registration::RigidTransform& placement) {
+                        const geometry::RigidTransform& placement) {
   cad::Model out = nominal;
   for (cad::Face& face : out.faces) {
     face.surface = nurbs::transformed(deformed_surface(face.surface, face.outward, deformation), placement);

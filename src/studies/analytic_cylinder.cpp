@@ -1,4 +1,4 @@
-#include "studies/analytic_cylinder.hpp"
+#include "probecomp/studies/analytic_cylinder.hpp"
 
 #include <cmath>
 #include <numbers>

@@ -1,4 +1,4 @@
-#include "studies/comparison.hpp"
+#include "probecomp/studies/comparison.hpp"
 
 #include <chrono>
 #include <limits>

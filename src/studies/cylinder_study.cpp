@@ -1,10 +1,10 @@
-#include "studies/cylinder_study.hpp"
+#include "probecomp/studies/cylinder_study.hpp"
 
 #include <chrono>
 #include <cmath>
 #include <numbers>
 
-#include "nurbs/constructors.hpp"
+#include "probecomp/nurbs/constructors.hpp"
 
 namespace probecomp::studies {
 
@@ -15,7 +15,7 @@ constexpr double kDegree = std::numbers::pi / 180.0;
 constexpr double kSmoothingClaimFromSigma = 0.010;
 
 CylinderStudyRow run_row(const cad::Model& nominal, const CylinderStudyOptions& o, const simulation::Deformation& d,
-                         const registration::RigidTransform& placement, double sigma, std::uint64_t seed) {
+                         const geometry::RigidTransform& placement, double sigma, std::uint64_t seed) {
   const auto t0 = std::chrono::steady_clock::now();
   SimulatedMeasurement m{.nominal = nominal, .deformation = d, .placement = placement,
                          .plan = simulation::grid_plan(nominal.faces.at(0), o.grid, o.grid, o.margin),
@@ -70,7 +70,7 @@ bool CylinderStudyResult::cad_smooths_noise() const {
 
 CylinderStudyResult run_cylinder_misalignment_study(const CylinderStudyOptions& o) {
   const cad::Model nominal = cylinder_part(o.part);
-  const registration::RigidTransform placement = registration::from_pose({.t = Vector3(0.0, 0.0, o.misalignment)});
+  const geometry::RigidTransform placement = geometry::from_pose({.t = Vector3(0.0, 0.0, o.misalignment)});
   CylinderStudyResult out;
   for (std::size_t k = 0; k < o.sigmas.size(); ++k) {
     out.rows.push_back(run_row(nominal, o, {}, placement, o.sigmas[k], o.seed + k));
@@ -85,7 +85,7 @@ CylinderStudyResult run_cylinder_deformation_study(const CylinderStudyOptions& o
   std::uint64_t k = 0;
   for (double peak : o.peaks) {
     for (double sigma : o.sigmas) {
-      out.rows.push_back(run_row(nominal, o, cylinder_deformation(o, peak), registration::RigidTransform::Identity(),
+      out.rows.push_back(run_row(nominal, o, cylinder_deformation(o, peak), geometry::RigidTransform::Identity(),
                                  sigma, o.seed + k++));
       out.rows.back().peak = peak;
     }

@@ -1,4 +1,4 @@
-#include "studies/freeform_study.hpp"
+#include "probecomp/studies/freeform_study.hpp"
 
 #include <algorithm>
 #include <random>

@@ -1,11 +1,12 @@
-#include "studies/registration_study.hpp"
+#include "probecomp/studies/registration_study.hpp"
 
 #include <cmath>
 #include <random>
 
-#include "cad/offset_model.hpp"
-#include "nurbs/constructors.hpp"
-#include "registration/routes.hpp"
+#include "probecomp/cad/offset_model.hpp"
+#include "probecomp/compensation/conventional.hpp"
+#include "probecomp/nurbs/constructors.hpp"
+#include "probecomp/registration/routes.hpp"
 
 namespace probecomp::studies {
 
@@ -47,9 +48,9 @@ double t975(int nu) {
          (3 * z7 + 19 * z5 + 17 * z3 - 15 * z) / (384 * n * n * n);
 }
 
-PoseError pose_error(const registration::RigidTransform& estimated, const registration::RigidTransform& truth) {
-  const registration::Pose e = registration::to_pose(estimated);
-  const registration::Pose t = registration::to_pose(truth);
+PoseError pose_error(const geometry::RigidTransform& estimated, const geometry::RigidTransform& truth) {
+  const geometry::Pose e = geometry::to_pose(estimated);
+  const geometry::Pose t = geometry::to_pose(truth);
   return {e.rx - t.rx, e.ry - t.ry, e.rz - t.rz, e.t.x() - t.t.x(), e.t.y() - t.t.y(), e.t.z() - t.t.z()};
 }
 
@@ -99,23 +100,23 @@ RegistrationStudyResult run_registration_study(const RegistrationStudyOptions& o
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   std::normal_distribution<double> gauss(0.0, 1.0);
   for (int trial = 0; trial < options.trials; ++trial) {
-    registration::Pose misalignment;
+    geometry::Pose misalignment;
     misalignment.rx = options.max_rotation * unit(rng);
     misalignment.ry = options.max_rotation * unit(rng);
     misalignment.rz = options.max_rotation * unit(rng);
     misalignment.t = Vector3(unit(rng), unit(rng), unit(rng)) * options.max_translation;
-    const registration::RigidTransform M = registration::from_pose(misalignment);
+    const geometry::RigidTransform M = geometry::from_pose(misalignment);
     std::vector<Point3> raw(points.size());
     for (std::size_t i = 0; i < points.size(); ++i) {
       raw[i] = M * (points[i] + options.probe_radius * normals[i]);
       if (options.noise > 0.0) raw[i] += options.noise * Vector3(gauss(rng), gauss(rng), gauss(rng));
     }
     registration::RegistrationOptions reg = options.registration;
-    reg.initial = registration::RigidTransform::Identity();
+    reg.initial = geometry::RigidTransform::Identity();
     const registration::RegistrationResult p = registration::register_to_offset_model(offset, raw, reg);
     // The approach normals are the unperturbed model's: the CMM was programmed from the nominal.
     const registration::RegistrationResult c =
-        registration::register_conventional(nominal, raw, normals, options.probe_radius, reg);
+        compensation::register_conventional(nominal, raw, normals, options.probe_radius, reg);
     for (auto [route, r] : {std::pair{&result.proposed, &p}, std::pair{&result.conventional, &c}}) {
       route->errors.push_back(pose_error(r->transform, M));
       route->converged += r->converged();

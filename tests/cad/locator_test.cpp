@@ -12,8 +12,8 @@
 
 #include <random>
 
-#include "cad/locator.hpp"
-#include "cad/plan.hpp"
+#include "probecomp/cad/locator.hpp"
+#include "probecomp/cad/plan.hpp"
 #include "support/occt_files.hpp"
 
 namespace probecomp::cad {

@@ -9,8 +9,8 @@
 #include <fstream>
 #include <random>
 
-#include "cad/model.hpp"
-#include "occt/convert.hpp"
+#include "probecomp/cad/model.hpp"
+#include "probecomp/occt/convert.hpp"
 #include "support/occt_files.hpp"
 #include "support/test_surfaces.hpp"
 

@@ -1,13 +1,13 @@
 // offset_model on real CAD files: each face point moved by the offset distance along the face's outward normal
 // (an independent route: the nominal face's own geometry) lies on the offset model.
 
-#include "cad/offset_model.hpp"
+#include "probecomp/cad/offset_model.hpp"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "cad/locator.hpp"
+#include "probecomp/cad/locator.hpp"
 
 namespace probecomp::cad {
 namespace {

@@ -1,14 +1,14 @@
 // contact_points on exact centre surfaces: the contact points must land on the part surface itself.
 
-#include "compensation/contact.hpp"
+#include "probecomp/compensation/contact.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
-#include "fitting/offset.hpp"
-#include "nurbs/constructors.hpp"
+#include "probecomp/fitting/offset.hpp"
+#include "probecomp/nurbs/constructors.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace probecomp::compensation {

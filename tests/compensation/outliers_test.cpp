@@ -2,7 +2,7 @@
 // three point spacings wide, plus noise) are all found, and hardly anything else, on a grid and on scattered
 // points.
 
-#include "compensation/outliers.hpp"
+#include "probecomp/compensation/outliers.hpp"
 
 #include <gtest/gtest.h>
 

@@ -2,16 +2,16 @@
 // tests/simulation): errors are signed distances of the compensated points from the actual surface, which the
 // simulator knows exactly.
 
-#include "compensation/pipeline.hpp"
+#include "probecomp/compensation/pipeline.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
-#include "cad/locator.hpp"
-#include "cad/plan.hpp"
-#include "studies/freeform_study.hpp"
+#include "probecomp/cad/locator.hpp"
+#include "probecomp/cad/plan.hpp"
+#include "probecomp/studies/freeform_study.hpp"
 
 namespace probecomp {
 namespace {
@@ -50,7 +50,7 @@ TEST(Pipeline, RandomShuffledPointsWithoutApproachNormalsMeetTheBars) {
   o.approach_normals = false;
   const studies::FreeformStudyResult r = studies::run_freeform_study(o);
   expect_freeform_bars(r);
-  EXPECT_EQ(r.cad.material.at(0).source, registration::MaterialSource::Data);
+  EXPECT_EQ(r.cad.material.at(0).source, cad::MaterialSource::Data);
 }
 
 TEST(Pipeline, SurfaceWhoseNormalPointsIntoTheMaterialMeetsTheBars) {
@@ -150,8 +150,8 @@ TEST(Pipeline, MultiFaceStepPartLandsEveryPointOnItsFace) {
   const std::vector<cad::PlannedPoint> planned = cad::plan_points(nominal, 0.025, {2, 3, 5});
   std::vector<simulation::ProgrammedPoint> plan;
   for (const auto& p : planned) plan.push_back({p.point, p.normal, p.face});
-  const registration::RigidTransform placement =
-      registration::from_pose({.rx = 0.3, .ry = -0.2, .rz = 0.1, .t = Vector3(0.005, -0.003, 0.004)});
+  const geometry::RigidTransform placement =
+      geometry::from_pose({.rx = 0.3, .ry = -0.2, .rz = 0.1, .t = Vector3(0.005, -0.003, 0.004)});
   const cad::Model actual = simulation::actual_model(nominal, {}, placement);
   const cad::ModelLocator actual_locator(actual);
   const double sigma = 0.0005;

@@ -1,7 +1,7 @@
 // fit_surface (refinement, parameter correction, noise estimate) against a known truth that the nominal knots
 // cannot follow: a free-form patch with a small dent.
 
-#include "fitting/adaptive.hpp"
+#include "probecomp/fitting/adaptive.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <numbers>
 #include <random>
 
-#include "nurbs/closest_point.hpp"
+#include "probecomp/nurbs/closest_point.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace probecomp::fitting {

@@ -1,7 +1,7 @@
 // fit_control_points against exact answers: the points are sampled from a known surface (the truth), so the
 // fitted surface is compared with the truth itself, at parameters other than the data's.
 
-#include "fitting/least_squares.hpp"
+#include "probecomp/fitting/least_squares.hpp"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

@@ -1,7 +1,7 @@
 // offset_surface against exact offsets (plane, cylinder: closed form) and against OpenCASCADE's
 // Geom_OffsetSurface (free form), at random parameters that are neither the fit's samples nor its check grid.
 
-#include "fitting/offset.hpp"
+#include "probecomp/fitting/offset.hpp"
 
 #include <Geom_OffsetSurface.hxx>
 #include <GeomLProp_SLProps.hxx>
@@ -11,9 +11,9 @@
 #include <numbers>
 #include <random>
 
-#include "nurbs/closest_point.hpp"
-#include "nurbs/constructors.hpp"
-#include "occt/convert.hpp"
+#include "probecomp/nurbs/closest_point.hpp"
+#include "probecomp/nurbs/constructors.hpp"
+#include "probecomp/occt/convert.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace probecomp::fitting {

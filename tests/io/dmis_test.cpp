@@ -1,4 +1,4 @@
-#include "io/dmis.hpp"
+#include "probecomp/io/dmis.hpp"
 
 #include <gtest/gtest.h>
 

@@ -5,8 +5,8 @@
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
 
-#include "nurbs/closest_point.hpp"
-#include "occt/convert.hpp"
+#include "probecomp/nurbs/closest_point.hpp"
+#include "probecomp/occt/convert.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace probecomp::nurbs {

@@ -1,6 +1,6 @@
 // Closest points with exact answers: planes, cylinders, edges and corners, degenerate queries, determinism.
 
-#include "nurbs/closest_point.hpp"
+#include "probecomp/nurbs/closest_point.hpp"
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -8,7 +8,7 @@
 #include <numbers>
 #include <random>
 
-#include "nurbs/constructors.hpp"
+#include "probecomp/nurbs/constructors.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace probecomp::nurbs {

@@ -1,4 +1,4 @@
-#include "nurbs/constructors.hpp"
+#include "probecomp/nurbs/constructors.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,11 +1,11 @@
-#include "nurbs/curve.hpp"
+#include "probecomp/nurbs/curve.hpp"
 
 #include <gtest/gtest.h>
 
 #include <numbers>
 #include <random>
 
-#include "nurbs/constructors.hpp"
+#include "probecomp/nurbs/constructors.hpp"
 
 namespace probecomp::nurbs {
 namespace {

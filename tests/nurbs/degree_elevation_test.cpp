@@ -5,8 +5,8 @@
 
 #include <random>
 
-#include "nurbs/constructors.hpp"
-#include "nurbs/degree_elevation.hpp"
+#include "probecomp/nurbs/constructors.hpp"
+#include "probecomp/nurbs/degree_elevation.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace {

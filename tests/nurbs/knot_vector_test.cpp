@@ -1,4 +1,4 @@
-#include "nurbs/knot_vector.hpp"
+#include "probecomp/nurbs/knot_vector.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,15 +1,15 @@
 // The normal polynomial N = W³ S_u × S_v of a rational Bézier patch, against the surface's own normals, and the
 // cone of its coefficients as a bound on every normal of a sub-patch.
 
-#include "nurbs/normal_cone.hpp"
+#include "probecomp/nurbs/normal_cone.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
-#include "nurbs/knot_insertion.hpp"
-#include "nurbs/surface.hpp"
+#include "probecomp/nurbs/knot_insertion.hpp"
+#include "probecomp/nurbs/surface.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace probecomp::nurbs {

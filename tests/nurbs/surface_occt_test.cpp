@@ -4,8 +4,8 @@
 
 #include <random>
 
-#include "nurbs/surface.hpp"
-#include "occt/convert.hpp"
+#include "probecomp/nurbs/surface.hpp"
+#include "probecomp/occt/convert.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace probecomp::nurbs {

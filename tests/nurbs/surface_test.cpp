@@ -1,4 +1,4 @@
-#include "nurbs/surface.hpp"
+#include "probecomp/nurbs/surface.hpp"
 
 #include <gtest/gtest.h>
 

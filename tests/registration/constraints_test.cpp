@@ -1,6 +1,6 @@
 // Degrees of freedom of point-to-plane alignment for shapes whose symmetries are known.
 
-#include "registration/constraints.hpp"
+#include "probecomp/registration/constraints.hpp"
 
 #include <gtest/gtest.h>
 
@@ -18,7 +18,7 @@ Constraints of(const std::vector<Point3>& x, const std::vector<Vector3>& n) {
   const double L = std::sqrt(L2 / static_cast<double>(x.size()));
   Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
   for (std::size_t i = 0; i < x.size(); ++i) {
-    Twist J;
+    geometry::Twist J;
     J.head<3>() = (x[i] - c).cross(n[i]) / L;
     J.tail<3>() = n[i];
     H += J * J.transpose();

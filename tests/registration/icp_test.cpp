@@ -1,6 +1,6 @@
 // ICP against known rigid motions: the truth is the motion the test applied, never an earlier output.
 
-#include "registration/icp.hpp"
+#include "probecomp/registration/icp.hpp"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -8,7 +8,7 @@
 #include <iostream>
 #include <random>
 
-#include "nurbs/constructors.hpp"
+#include "probecomp/nurbs/constructors.hpp"
 #include "registration/support.hpp"
 #include "support/test_surfaces.hpp"
 
@@ -22,7 +22,7 @@ using testing::rotation_disagreement_deg;
 using testing::single_face_model;
 
 // About 1 mm and 1° on each axis, as the issue asks.
-const RigidTransform kMisalignment = from_pose({.rx = 0.7, .ry = -0.9, .rz = 0.6, .t = Vector3(0.8, -0.6, 0.9)});
+const geometry::RigidTransform kMisalignment = geometry::from_pose({.rx = 0.7, .ry = -0.9, .rz = 0.6, .t = Vector3(0.8, -0.6, 0.9)});
 
 nurbs::Surface freeform() { return testing::random_rational_surface(11, {.nu = 10, .nv = 9, .height = 12.0}); }
 
@@ -147,10 +147,10 @@ TEST(Icp, APlaneFixesThreeMotionsAndTheOthersStayAtTheStart) {
   Point3 c = Point3::Zero();
   for (const Point3& p : measured) c += p;
   c /= static_cast<double>(measured.size());
-  const RigidTransform to_cad = r.transform.inverse();
+  const geometry::RigidTransform to_cad = r.transform.inverse();
   const Vector3 shift = to_cad * c - c;
   EXPECT_LT(std::hypot(shift.x(), shift.y()), 1e-9);
-  EXPECT_LT(std::abs(to_twist(to_cad)(2)), 1e-12);
+  EXPECT_LT(std::abs(geometry::to_twist(to_cad)(2)), 1e-12);
 }
 
 TEST(Icp, ACylinderLeavesItsAxisFree) {
@@ -159,7 +159,7 @@ TEST(Icp, ACylinderLeavesItsAxisFree) {
       single_face_model(nurbs::make_cylinder_section({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 10.0, 0.0, M_PI, 40.0));
   const cad::ModelLocator locator(model);
   const std::vector<Point3> nominal = points_on(model.faces[0].surface, 2000, 0.05, 5);
-  const RigidTransform motion = from_pose({.rx = 0.3, .ry = 0.2, .rz = 1.0, .t = Vector3(0.2, -0.3, 0.7)});
+  const geometry::RigidTransform motion = geometry::from_pose({.rx = 0.3, .ry = 0.2, .rz = 1.0, .t = Vector3(0.2, -0.3, 0.7)});
   const std::vector<Point3> measured = moved(motion, nominal);
   const RegistrationResult r = register_points(locator, measured);
   ASSERT_TRUE(r.converged()) << r.stop_reason;
@@ -172,7 +172,7 @@ TEST(Icp, ACylinderLeavesItsAxisFree) {
   EXPECT_LT(std::hypot(r.constraints.free[1].through.x(), r.constraints.free[1].through.y()), 1e-6);  // the axis
   for (const PointMatch& m : r.matches) EXPECT_LT(std::abs(m.distance), 1e-9);
   // The measured cylinder's axis is where the registered model puts it: the fixed motions are right.
-  const RigidTransform to_cad = r.transform.inverse();
+  const geometry::RigidTransform to_cad = r.transform.inverse();
   for (const Point3& p : measured) EXPECT_NEAR(std::hypot((to_cad * p).x(), (to_cad * p).y()), 10.0, 1e-9);
   // The free ones were held: no turn about the axis, no slide along it (the data centroid kept its z).
   Point3 c = Point3::Zero();
@@ -181,7 +181,7 @@ TEST(Icp, ACylinderLeavesItsAxisFree) {
   EXPECT_LT(std::abs((to_cad * c - c).z()), 1e-9);
   // Each step turns about no axis parallel to z; the steps' compositions do, to second order in the tilt
   // (0.3° and 0.2° here: about 1e-6 rad), against the 1° (0.017 rad) turn the data cannot see.
-  EXPECT_LT(std::abs(to_twist(to_cad)(2)), 2e-6);
+  EXPECT_LT(std::abs(geometry::to_twist(to_cad)(2)), 2e-6);
 }
 
 TEST(Icp, PointsBeyondTheFaceAreReportedAndNotUsed) {
@@ -195,7 +195,7 @@ TEST(Icp, PointsBeyondTheFaceAreReportedAndNotUsed) {
   ASSERT_TRUE(r.converged()) << r.stop_reason;
   int beyond = 0;
   for (std::size_t k = 0; k < measured.size(); ++k) {
-    const RigidTransform to_cad = r.transform.inverse();
+    const geometry::RigidTransform to_cad = r.transform.inverse();
     const Point3 x = to_cad * measured[k];
     const bool outside = x.y() < -1e-9 || x.y() > 100.0 + 1e-9 || x.x() > 100.0 + 1e-9;
     if (outside) {

@@ -1,6 +1,8 @@
-// The two registration routes and the choice of material side, on cases with a known answer.
+// The two registration routes, on a case with a known answer.
 
-#include "registration/routes.hpp"
+#include "probecomp/registration/routes.hpp"
+
+#include "probecomp/compensation/conventional.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,7 +17,7 @@ namespace {
 using testing::largest_disagreement;
 using testing::single_face_model;
 
-const RigidTransform kMisalignment = from_pose({.rx = -0.5, .ry = 0.8, .rz = 0.4, .t = Vector3(-0.7, 0.4, 0.6)});
+const geometry::RigidTransform kMisalignment = geometry::from_pose({.rx = -0.5, .ry = 0.8, .rz = 0.4, .t = Vector3(-0.7, 0.4, 0.6)});
 
 struct Probed {
   std::vector<Point3> contacts, centres;  // machine frame
@@ -46,7 +48,7 @@ TEST(Routes, RawCentresAgainstTheOffsetModelRecoverTheMotion) {
   ASSERT_EQ(offset.failed(), 0);
   const RegistrationResult r = register_to_offset_model(offset, p.centres);
   ASSERT_TRUE(r.converged()) << r.stop_reason;
-  const RegistrationResult c = register_conventional(nominal, p.centres, p.approach, 1.0);
+  const RegistrationResult c = compensation::register_conventional(nominal, p.centres, p.approach, 1.0);
   ASSERT_TRUE(c.converged()) << c.stop_reason;
   // The offset surface is a fit to 1e-5 mm: the motion comes back to about that.
   EXPECT_LT(largest_disagreement(r.transform, kMisalignment, p.contacts), 2e-5);
@@ -56,31 +58,6 @@ TEST(Routes, RawCentresAgainstTheOffsetModelRecoverTheMotion) {
   // error r·(1 − cos θ) along the actual normal and r·sin θ across it: it is worse but converges.
   EXPECT_GT(largest_disagreement(c.transform, kMisalignment, p.contacts),
             5.0 * largest_disagreement(r.transform, kMisalignment, p.contacts));
-}
-
-TEST(Routes, MaterialSideFromTheDataAndFromTheApproachNormals) {
-  const nurbs::Surface s = testing::random_rational_surface(22, {.nu = 8, .nv = 8, .height = 6.0});
-  const Probed p = probe(s, 1.0, -1, 30);  // probed from the −(S_u × S_v) side
-  for (bool with_normals : {false, true}) {
-    cad::Model m = single_face_model(s, +1, false);  // the file's orientation is the wrong one
-    std::optional<std::span<const Vector3>> normals;
-    if (with_normals) normals = std::span<const Vector3>(p.approach);
-    // The initial transform is the nominal pose: the misalignment (about 1 mm) is unknown at this stage.
-    const std::vector<MaterialSide> sides = decide_material_side(m, p.centres, normals, RigidTransform::Identity());
-    ASSERT_EQ(sides.size(), 1u);
-    EXPECT_EQ(sides[0].outward, -1);
-    EXPECT_EQ(m.faces[0].outward, -1);
-    EXPECT_EQ(sides[0].source, with_normals ? MaterialSource::ApproachNormals : MaterialSource::Data);
-    EXPECT_GT(sides[0].agreeing, 0.9 * sides[0].points);
-    if (!with_normals) {
-      EXPECT_GT(sides[0].median_distance, 0.0);  // r = 1 mm give or take the misalignment
-    }
-  }
-  // A face from a solid keeps its side whatever the points say.
-  cad::Model solid = single_face_model(s, +1, true);
-  const std::vector<MaterialSide> sides = decide_material_side(solid, p.centres, std::nullopt, RigidTransform::Identity());
-  EXPECT_EQ(sides[0].source, MaterialSource::Solid);
-  EXPECT_EQ(solid.faces[0].outward, +1);
 }
 
 }  // namespace

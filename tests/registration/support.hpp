@@ -5,8 +5,8 @@
 #include <random>
 #include <vector>
 
-#include "cad/model.hpp"
-#include "registration/rigid.hpp"
+#include "probecomp/cad/model.hpp"
+#include "probecomp/geometry/rigid.hpp"
 
 namespace probecomp::testing {
 
@@ -31,14 +31,14 @@ inline std::vector<Point3> points_on(const nurbs::Surface& s, int n, double marg
   return out;
 }
 
-inline std::vector<Point3> moved(const registration::RigidTransform& T, const std::vector<Point3>& points) {
+inline std::vector<Point3> moved(const geometry::RigidTransform& T, const std::vector<Point3>& points) {
   std::vector<Point3> out;
   for (const Point3& p : points) out.push_back(T * p);
   return out;
 }
 
 // The largest distance between where `estimated` and `truth` put the points, mm.
-inline double largest_disagreement(const registration::RigidTransform& estimated, const registration::RigidTransform& truth,
+inline double largest_disagreement(const geometry::RigidTransform& estimated, const geometry::RigidTransform& truth,
                                    const std::vector<Point3>& points) {
   double worst = 0.0;
   for (const Point3& p : points) worst = std::max(worst, (estimated * p - truth * p).norm());
@@ -46,8 +46,8 @@ inline double largest_disagreement(const registration::RigidTransform& estimated
 }
 
 // The angle of the rotation between the two transforms, degrees.
-inline double rotation_disagreement_deg(const registration::RigidTransform& estimated,
-                                        const registration::RigidTransform& truth) {
+inline double rotation_disagreement_deg(const geometry::RigidTransform& estimated,
+                                        const geometry::RigidTransform& truth) {
   return Eigen::AngleAxisd(estimated.rotation().transpose() * truth.rotation()).angle() * 180.0 / M_PI;
 }
 

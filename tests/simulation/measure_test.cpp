@@ -11,14 +11,14 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "cad/locator.hpp"
-#include "cad/model.hpp"
-#include "cad/plan.hpp"
-#include "occt/convert.hpp"
-#include "simulation/deformation.hpp"
-#include "simulation/freeform_case.hpp"
-#include "simulation/measure.hpp"
-#include "studies/cylinder_study.hpp"
+#include "probecomp/cad/locator.hpp"
+#include "probecomp/cad/model.hpp"
+#include "probecomp/cad/plan.hpp"
+#include "probecomp/occt/convert.hpp"
+#include "probecomp/simulation/deformation.hpp"
+#include "probecomp/simulation/freeform_case.hpp"
+#include "probecomp/simulation/measure.hpp"
+#include "probecomp/studies/cylinder_study.hpp"
 
 namespace {
 
@@ -93,7 +93,7 @@ TEST(Simulation, DeformedMisalignedCylinderTouchesAreOnTheLineAtTheTipRadius) {
   studies::CylinderStudyOptions o;
   const cad::Model nominal = studies::cylinder_part(o.part);
   const cad::Model actual = simulation::actual_model(
-      nominal, studies::cylinder_deformation(o, 1.5), registration::from_pose({.rx = 0.5, .t = Vector3(0.1, 0.2, 0.5)}));
+      nominal, studies::cylinder_deformation(o, 1.5), geometry::from_pose({.rx = 0.5, .t = Vector3(0.1, 0.2, 0.5)}));
   const cad::ModelLocator locator(actual);
   const auto plan = simulation::grid_plan(nominal.faces.front(), 30, 30, o.margin);
   const auto touches = simulation::simulate_touches(locator, plan, {.probe_radius = 1.0});
@@ -109,7 +109,7 @@ TEST(Simulation, MultiFaceStepPartWithABumpTouchesAreOnTheLineAtTheTipRadius) {
   for (const auto& p : cad::plan_points(nominal, 0.05, {2, 3, 5})) plan.push_back({p.point, p.normal, p.face});
   simulation::Deformation d;
   d.bumps.push_back({.centre = plan[plan.size() / 2].point, .amplitude = 0.01, .width = 0.1});
-  const cad::Model actual = simulation::actual_model(nominal, d, registration::from_pose({.rz = 0.2, .t = Vector3(0.002, 0, 0)}));
+  const cad::Model actual = simulation::actual_model(nominal, d, geometry::from_pose({.rz = 0.2, .t = Vector3(0.002, 0, 0)}));
   const cad::ModelLocator locator(actual);
   const auto touches = simulation::simulate_touches(locator, plan, {.probe_radius = 0.1});
   const Checked k = check_touches(actual, plan, touches, 0.1);

@@ -7,11 +7,11 @@
 #include <cmath>
 #include <numbers>
 
-#include "cad/locator.hpp"
-#include "nurbs/constructors.hpp"
-#include "simulation/measure.hpp"
-#include "studies/analytic_cylinder.hpp"
-#include "studies/cylinder_study.hpp"
+#include "probecomp/cad/locator.hpp"
+#include "probecomp/nurbs/constructors.hpp"
+#include "probecomp/simulation/measure.hpp"
+#include "probecomp/studies/analytic_cylinder.hpp"
+#include "probecomp/studies/cylinder_study.hpp"
 
 namespace {
 
@@ -50,7 +50,7 @@ TEST(AnalyticCylinder, EqualsTheSimulatorOnAMisalignedNurbsCylinder) {
   cad::Model nominal = studies::cylinder_part();
   nominal.faces[0].surface = nurbs::make_cylinder_section(Point3(0, 0, -5), Vector3::UnitX(), Vector3::UnitY(), R,
                                                           -0.5 * std::numbers::pi, 1.5 * std::numbers::pi, 10.0);
-  const cad::Model actual = simulation::actual_model(nominal, {}, registration::from_pose({.t = Vector3(0.0, dy, 0.0)}));
+  const cad::Model actual = simulation::actual_model(nominal, {}, geometry::from_pose({.t = Vector3(0.0, dy, 0.0)}));
   const cad::ModelLocator locator(actual);
   std::vector<simulation::ProgrammedPoint> plan;
   for (int k = 0; k <= 36; ++k) {

@@ -1,7 +1,7 @@
 // The paper's registration Monte Carlo: with no noise the proposed route is exact (the bar is 1e-5°
 // and 1e-5 mm), and the conventional route carries its compensation error.
 
-#include "studies/registration_study.hpp"
+#include "probecomp/studies/registration_study.hpp"
 
 #include <gtest/gtest.h>
 

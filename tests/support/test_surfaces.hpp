@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "nurbs/surface.hpp"
+#include "probecomp/nurbs/surface.hpp"
 
 namespace probecomp::testing {
 

@@ -1,0 +1,38 @@
+#pragma once
+// Each face's material side where the CAD file does not give it (DESIGN.md §4): a face that bounds a solid
+// knows it; any other is decided from the approach normals of the points nearest to it, or else from the side
+// its raw probe centres lie on (a probe radius off the part, on the probe's side).
+
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "probecomp/cad/model.hpp"
+#include "probecomp/geometry/rigid.hpp"
+
+namespace probecomp::cad {
+
+enum class MaterialSource {
+  Solid,            // the face bounds a closed solid in the file
+  ApproachNormals,  // the approach normals of the points on the face point to one side
+  Data,             // the raw centres lie on one side (they are a probe radius off the part, on the probe side)
+  NoPoints,         // nothing to decide from: the file's orientation is kept
+};
+[[nodiscard]] const char* to_string(MaterialSource s);
+
+struct MaterialSide {
+  int outward = 1;  // as Face::outward
+  MaterialSource source = MaterialSource::NoPoints;
+  int points = 0;         // points whose nearest face this is
+  int agreeing = 0;       // of those, how many vote for the chosen side
+  double median_distance = 0.0;  // median signed distance of the raw centres, on the chosen side (mm; Data)
+};
+
+// For every face without a known material side, chooses it from the approach normals when given, else
+// from which side the raw centres lie on, after the initial transform (CAD to machine); updates
+// model.faces[k].outward and returns what was decided per face. Faces from solids are kept as they are.
+[[nodiscard]] std::vector<MaterialSide> decide_material_side(Model& model, std::span<const Point3> raw_centres,
+                                                             std::optional<std::span<const Vector3>> approach_normals,
+                                                             const geometry::RigidTransform& initial);
+
+}  // namespace probecomp::cad

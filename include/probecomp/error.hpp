@@ -1,0 +1,40 @@
+#pragma once
+// What probecomp throws when it cannot return a sound result. Every message is one line in the field's words
+// that names the file (and line), the face or the cause: never a command-line option, so that the library,
+// the command line and the Python bindings can all show it as it is.
+//   InputError         points or options the method cannot use (a point file's bad line, no points, a
+//                      non-positive probe radius, points nowhere near the model)
+//   CadError           a CAD file that cannot be read or used as a model
+//   RegistrationError  the points could not be registered to the model credibly
+//   FitError           a surface that could not be fitted or offset where the caller needs one
+
+#include <stdexcept>
+
+namespace probecomp {
+
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class InputError : public Error {
+ public:
+  using Error::Error;
+};
+
+class CadError : public Error {
+ public:
+  using Error::Error;
+};
+
+class RegistrationError : public Error {
+ public:
+  using Error::Error;
+};
+
+class FitError : public Error {
+ public:
+  using Error::Error;
+};
+
+}  // namespace probecomp

@@ -1,0 +1,29 @@
+#pragma once
+// The two ways to register probe data to a CAD model (DESIGN.md §2 step 3, paper §5.1):
+//   proposed      the raw probe centres against the model offset by the tip radius: no compensation error
+//                 can enter the registration;
+//   conventional  first compensate each centre along its approach normal, then register the contact points
+//                 to the nominal model (the errors of that compensation bias the alignment); it is
+//                 compensation::register_conventional, as it needs the conventional compensation first.
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "probecomp/cad/offset_model.hpp"
+#include "probecomp/registration/icp.hpp"
+
+namespace probecomp::registration {
+
+// The raw centres (machine frame) registered to `offset` (the nominal offset by +r on every face's outward
+// side; see cad::offset_model).
+// The robust scale is kept at or above the offset faces' deviation from the true offset (model error).
+[[nodiscard]] RegistrationResult register_to_offset_model(const cad::OffsetModel& offset,
+                                                          std::span<const Point3> raw_centres,
+                                                          const RegistrationOptions& options = {});
+// The same with the offset model already indexed (`locator` built on offset.model).
+[[nodiscard]] RegistrationResult register_to_offset_model(const cad::OffsetModel& offset, const cad::ModelLocator& locator,
+                                                          std::span<const Point3> raw_centres,
+                                                          const RegistrationOptions& options = {});
+
+}  // namespace probecomp::registration

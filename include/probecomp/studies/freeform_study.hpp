@@ -1,0 +1,36 @@
+#pragma once
+// The paper's free-form comparison (§7.3, Table 2) end to end: the built-in case (simulation/freeform_case.hpp)
+// run through the paper's simulation protocol (studies/comparison.hpp).
+
+#include <cstdint>
+#include <vector>
+
+#include "probecomp/simulation/freeform_case.hpp"
+#include "probecomp/studies/comparison.hpp"
+
+namespace probecomp::studies {
+
+struct FreeformStudyOptions {
+  int random_points = 0;        // > 0: this many points at random (u, v) instead of the 120 × 60 grid
+  bool shuffle = false;         // the points in random order
+  bool approach_normals = true; // false: the CAD method runs without i,j,k (the conventional still uses them)
+  bool reversed = false;        // the CAD surface's S_u × S_v points into the material
+  std::uint64_t seed = 1;       // noise, random points and shuffling
+  double noise_sigma = -1.0;    // >= 0: replaces the case's σ (mm)
+  compensation::CompensateOptions compensate;  // method and probe radius are set by the study
+};
+
+struct FreeformStudyResult : MethodComparison {
+  simulation::FreeformCase freeform;
+  std::vector<simulation::ProgrammedPoint> plan;  // in measurement order
+};
+
+[[nodiscard]] FreeformStudyResult run_freeform_study(const FreeformStudyOptions& options = {});
+
+// The paper's Table 2 (mm): conventional and proposed std, mean, min, max.
+struct PaperTable2 {
+  ErrorSummary conventional, proposed;
+};
+[[nodiscard]] PaperTable2 paper_table2();
+
+}  // namespace probecomp::studies

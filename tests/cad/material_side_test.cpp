@@ -1,0 +1,64 @@
+// The choice of each face's material side, on cases with a known answer.
+
+#include "probecomp/cad/material_side.hpp"
+
+#include <gtest/gtest.h>
+
+#include "registration/support.hpp"
+#include "support/test_surfaces.hpp"
+
+namespace probecomp::cad {
+namespace {
+
+using probecomp::testing::single_face_model;
+
+const geometry::RigidTransform kMisalignment = geometry::from_pose({.rx = -0.5, .ry = 0.8, .rz = 0.4, .t = Vector3(-0.7, 0.4, 0.6)});
+
+struct Probed {
+  std::vector<Point3> contacts, centres;  // machine frame
+  std::vector<Vector3> approach;          // the nominal outward normals the CMM was programmed with
+};
+
+// Probe centres a radius r off the surface on the side `side` (+1: along S_u × S_v), moved by kMisalignment.
+Probed probe(const nurbs::Surface& s, double r, int side, int n) {
+  Probed p;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const double u = 0.05 + 0.9 * i / (n - 1.0), v = 0.05 + 0.9 * j / (n - 1.0);
+      const Vector3 out = side * nurbs::unit_normal(s, u, v).n;
+      const Point3 c = nurbs::evaluate(s, u, v);
+      p.contacts.push_back(kMisalignment * c);
+      p.centres.push_back(kMisalignment * (c + r * out));
+      p.approach.push_back(out);
+    }
+  }
+  return p;
+}
+
+TEST(MaterialSide, FromTheDataAndFromTheApproachNormals) {
+  const nurbs::Surface s = testing::random_rational_surface(22, {.nu = 8, .nv = 8, .height = 6.0});
+  const Probed p = probe(s, 1.0, -1, 30);  // probed from the −(S_u × S_v) side
+  for (bool with_normals : {false, true}) {
+    cad::Model m = single_face_model(s, +1, false);  // the file's orientation is the wrong one
+    std::optional<std::span<const Vector3>> normals;
+    if (with_normals) normals = std::span<const Vector3>(p.approach);
+    // The initial transform is the nominal pose: the misalignment (about 1 mm) is unknown at this stage.
+    const std::vector<MaterialSide> sides = decide_material_side(m, p.centres, normals, geometry::RigidTransform::Identity());
+    ASSERT_EQ(sides.size(), 1u);
+    EXPECT_EQ(sides[0].outward, -1);
+    EXPECT_EQ(m.faces[0].outward, -1);
+    EXPECT_EQ(sides[0].source, with_normals ? MaterialSource::ApproachNormals : MaterialSource::Data);
+    EXPECT_GT(sides[0].agreeing, 0.9 * sides[0].points);
+    if (!with_normals) {
+      EXPECT_GT(sides[0].median_distance, 0.0);  // r = 1 mm give or take the misalignment
+    }
+  }
+  // A face from a solid keeps its side whatever the points say.
+  cad::Model solid = single_face_model(s, +1, true);
+  const std::vector<MaterialSide> sides = decide_material_side(solid, p.centres, std::nullopt, geometry::RigidTransform::Identity());
+  EXPECT_EQ(sides[0].source, MaterialSource::Solid);
+  EXPECT_EQ(solid.faces[0].outward, +1);
+}
+
+}  // namespace
+}  // namespace probecomp::cad
