@@ -77,12 +77,10 @@ void run(benchmark::State& state, const Input& in) {
   }
   state.counters["points"] = static_cast<double>(in.raw.size());
   state.counters["ok"] = r.count(compensation::PointStatus::Ok);
-  state.counters["s_offset"] = r.seconds.offset;
+  state.counters["s_prepare"] = r.seconds.prepare;
   state.counters["s_register"] = r.seconds.registration;
   state.counters["s_fit"] = r.seconds.fitting;
-  state.counters["s_contact"] = r.seconds.compensation;
-  state.counters["s_deviation"] = r.seconds.deviation;
-  state.counters["s_side"] = r.seconds.material_side;
+  state.counters["s_compensate"] = r.seconds.compensation;
   state.counters["control_points"] = r.faces.empty() ? 0 : r.faces[0].control_points;
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);

@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "probecomp/geometry/point_tree.hpp"
+#include "probecomp/geometry/parallel.hpp"
 
 namespace probecomp::cad {
 
@@ -369,19 +370,12 @@ ModelPoint ModelLocator::closest_point(const Point3& query, const ModelPoint& hi
 std::vector<ModelPoint> ModelLocator::closest_points(std::span<const Point3> queries, std::span<const ModelPoint> hints,
                                                      HintedSearch mode) const {
   if (hints.size() != queries.size()) return closest_points(queries);
-  std::vector<ModelPoint> out(queries.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, queries.size(), 64), [&](const auto& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i) out[i] = closest_point(queries[i], hints[i], mode);
-  });
-  return out;
+  return geometry::parallel_map<ModelPoint>(queries.size(), 64,
+                                            [&](std::size_t i) { return closest_point(queries[i], hints[i], mode); });
 }
 
 std::vector<ModelPoint> ModelLocator::closest_points(std::span<const Point3> queries) const {
-  std::vector<ModelPoint> out(queries.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, queries.size(), 64), [&](const auto& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i) out[i] = closest_point(queries[i]);
-  });
-  return out;
+  return geometry::parallel_map<ModelPoint>(queries.size(), 64, [&](std::size_t i) { return closest_point(queries[i]); });
 }
 
 }  // namespace probecomp::cad

@@ -13,6 +13,7 @@ const char* to_string(MaterialSource s) {
     case MaterialSource::ApproachNormals: return "approach-normals";
     case MaterialSource::Data: return "data";
     case MaterialSource::NoPoints: return "no-points";
+    case MaterialSource::File: return "file";
   }
   return "?";
 }

@@ -270,6 +270,8 @@ void configure_exchange() {
 
 }  // namespace
 
+Model Model::load(const std::filesystem::path& path) { return read_model(path); }
+
 Model read_model(const std::filesystem::path& path) {
   const Format format = format_of(path);
   check_file_frame(path, format);

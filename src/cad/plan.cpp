@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "probecomp/error.hpp"
+
 namespace probecomp::cad {
 
 namespace {
@@ -36,14 +38,14 @@ double longest_iso_length(const nurbs::Surface& s, const nurbs::Domain& d, bool 
 }  // namespace
 
 std::vector<PlannedPoint> plan_points(const Model& model, double spacing, const std::vector<int>& faces) {
-  if (!(spacing > 0.0) || !std::isfinite(spacing)) throw std::invalid_argument("spacing must be a positive number of mm");
+  if (!(spacing > 0.0) || !std::isfinite(spacing)) throw InputError("spacing must be a positive number of mm");
   std::vector<int> chosen = faces;
   if (chosen.empty()) {
     for (const Face& f : model.faces) chosen.push_back(f.index);
   }
   for (int f : chosen) {
     if (f < 0 || f >= static_cast<int>(model.faces.size())) {
-      throw std::invalid_argument("face " + std::to_string(f) + " does not exist (the model has faces 0 to " +
+      throw InputError("face " + std::to_string(f) + " does not exist (the model has faces 0 to " +
                                   std::to_string(model.faces.size() - 1) + ")");
     }
   }
@@ -59,7 +61,7 @@ std::vector<PlannedPoint> plan_points(const Model& model, double spacing, const 
     const long nu = std::max(1L, std::lround(std::ceil(longest_iso_length(face.surface, d, true) / spacing)));
     const long nv = std::max(1L, std::lround(std::ceil(longest_iso_length(face.surface, d, false) / spacing)));
     if (nu * nv > kMaxPointsPerFace) {
-      throw std::invalid_argument("spacing " + std::to_string(spacing) + " mm would put more than " +
+      throw InputError("spacing " + std::to_string(spacing) + " mm would put more than " +
                                   std::to_string(kMaxPointsPerFace) + " points on face " + std::to_string(f));
     }
     for (long i = 0; i < nu; ++i) {

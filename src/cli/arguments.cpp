@@ -4,7 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "cli/format.hpp"
+#include "probecomp/io/format.hpp"
 #include "probecomp/io/text.hpp"
 
 namespace probecomp::cli {

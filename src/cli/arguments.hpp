@@ -6,9 +6,16 @@
 #include <vector>
 
 #include "probecomp/geometry/rigid.hpp"
+#include "probecomp/io/format.hpp"
 #include "probecomp/simulation/deformation.hpp"
 
 namespace probecomp::cli {
+
+// The commands format numbers as the result files do.
+using io::fmt;
+using io::json_string;
+using io::mm;
+using io::unit;
 
 // --probe-radius: a positive, finite number of mm.
 void check_probe_radius(double r);

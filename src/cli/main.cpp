@@ -1,11 +1,10 @@
 // probecomp command-line tool: compensate, fit and demo (the method end to end), info, project and plan on CAD
 // models, the paper's studies.
-// Every failure is one line on standard error ("probecomp: FILE:LINE: cause") and exit status 1; output files
-// are written whole or not at all.
+// Every failure is one line on standard error ("probecomp: FILE:LINE: cause") and an exit status that says
+// what kind (kExit* below); output files are written whole or not at all.
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -18,18 +17,27 @@
 #include "probecomp/cad/plan.hpp"
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
-#include "cli/format.hpp"
+#include "probecomp/io/format.hpp"
 #include "probecomp/io/point_table.hpp"
+#include "probecomp/error.hpp"
 #include "probecomp/version.hpp"
 
 namespace {
 
 using namespace probecomp;
 
+// Exit statuses, one per kind of failure (README "Exit status"); CLI11's own for a malformed command line.
+constexpr int kExitFailure = 1;       // anything else (a bug, or the system: memory, a file that cannot be written)
+constexpr int kExitUsage = 2;         // an option's value the command cannot use
+constexpr int kExitInput = 3;         // probecomp::InputError: points or options the method cannot use
+constexpr int kExitCad = 4;           // probecomp::CadError: a CAD file that cannot be read or used
+constexpr int kExitRegistration = 5;  // probecomp::RegistrationError
+constexpr int kExitFit = 6;           // probecomp::FitError
 using cli::fmt;
 using cli::json_string;
 using cli::mm;
 using cli::unit;
+
 
 // Writes to the file (atomically) or to standard output when no file is given.
 void emit(const std::string& output, const std::string& text) {
@@ -280,7 +288,12 @@ int main(int argc, char** argv) {
     }
   } catch (const std::exception& e) {
     std::cerr << "probecomp: " << e.what() << '\n';
-    return 1;
+    if (dynamic_cast<const CadError*>(&e)) return kExitCad;
+    if (dynamic_cast<const RegistrationError*>(&e)) return kExitRegistration;
+    if (dynamic_cast<const FitError*>(&e)) return kExitFit;
+    if (dynamic_cast<const InputError*>(&e)) return kExitInput;
+    if (dynamic_cast<const std::invalid_argument*>(&e)) return kExitUsage;  // the command's own checks
+    return kExitFailure;
   }
   std::cout << app.help();
   return 0;

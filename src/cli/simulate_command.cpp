@@ -12,7 +12,7 @@
 #include "probecomp/cad/plan.hpp"
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
-#include "cli/format.hpp"
+#include "probecomp/io/format.hpp"
 #include "probecomp/io/dmis.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/simulation/measure.hpp"

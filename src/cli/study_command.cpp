@@ -1,15 +1,16 @@
 // probecomp study NAME: the paper's studies (DESIGN.md §3), each printing a table beside the paper's figures and
 // writing DIR/NAME.csv (the series) and DIR/NAME.json (the summary).
 
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
 
+#include "cli/arguments.hpp"
 #include "cli/commands.hpp"
-#include "cli/format.hpp"
+#include "probecomp/geometry/stopwatch.hpp"
+#include "probecomp/io/format.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/studies/analytic_cylinder.hpp"
 #include "probecomp/studies/cylinder_study.hpp"
@@ -23,8 +24,6 @@ const std::vector<std::string> kStudyNames = {"analytic-cylinder", "registration
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 void write_study_files(const std::string& dir, const std::string& name, const std::string& csv, const std::string& json) {
   if (dir.empty()) return;
@@ -69,9 +68,9 @@ int run_study_registration(const StudyArgs& a) {
   options.seed = a.seed;
   if (a.noise >= 0.0) options.noise = a.noise;
   const std::string& output_dir = a.output_dir;
-  const auto start = std::chrono::steady_clock::now();
+  const geometry::Stopwatch clock;
   const studies::RegistrationStudyResult r = studies::run_registration_study(options);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = clock.seconds();
   const studies::PaperTable1 paper = studies::paper_table1();
 
   std::ostringstream t;
@@ -120,7 +119,7 @@ int run_study_registration(const StudyArgs& a) {
       << registration::to_string(options.registration.robust.loss) << "\",\n"
       << " \"proposed\": " << json_statistics(r.proposed.stats) << ",\n"
       << " \"conventional\": " << json_statistics(r.conventional.stats) << ",\n"
-      << " \"converged\": {\"proposed\": " << r.proposed.converged << ", \"conventional\": " << r.conventional.converged
+      << " \"converged_trials\": {\"proposed\": " << r.proposed.converged << ", \"conventional\": " << r.conventional.converged
       << "},\n"
       << " \"paper\": {\"proposed\": " << json_statistics(paper.proposed) << ",\n"
       << "           \"conventional\": " << json_statistics(paper.conventional) << "}}\n";
@@ -140,7 +139,7 @@ int run_study_registration(const StudyArgs& a) {
 
 
 int run_study_analytic_cylinder(const StudyArgs& a) {
-  const auto t0 = Clock::now();
+  const geometry::Stopwatch t0;
   // Fig. 3: R = 10, r = 1, dy = 2 (the paper's CMM experiment); Fig. 5: the largest error against dy for
   // r/R = 0.05 … 0.5 at R = 10; and the paper's worked example R = 10, r = 3, dy = 1.62 ("about 0.03 mm").
   const studies::CircleCase fig3{.R = 10.0, .r = 1.0, .dy = 2.0};
@@ -188,7 +187,7 @@ int run_study_analytic_cylinder(const StudyArgs& a) {
   row("example", example, example_max.theta_deg, example_max.error);
   t << "\nThe paper's example, R = 10, r = 3 (r/R = 0.3), dy = 1.62 mm: largest error " << fmt("%.6f", example_max.error)
     << " mm at theta = " << fmt("%.3f", example_max.theta_deg) << " deg (the paper reads about 0.03 mm off Fig. 5).\n"
-    << fmt("%.2f", since(t0)) << " s\n";
+    << fmt("%.2f", t0.seconds()) << " s\n";
   std::cout << t.str();
 
   std::ostringstream j;
@@ -202,7 +201,7 @@ int run_study_analytic_cylinder(const StudyArgs& a) {
 }
 
 int run_study_cylinder(const StudyArgs& a, bool deformation) {
-  const auto t0 = Clock::now();
+  const geometry::Stopwatch t0;
   studies::CylinderStudyOptions o;
   o.seed = a.seed;
   const studies::CylinderStudyResult r =
@@ -247,7 +246,7 @@ int run_study_cylinder(const StudyArgs& a, bool deformation) {
   const bool better = r.cad_better_everywhere(), smooths = r.cad_smooths_noise();
   t << "\nCAD-based |mean| and std below the conventional's in every row: " << (better ? "yes" : "NO") << "\n"
     << "CAD-based std below sigma wherever sigma >= 10 um: " << (smooths ? "yes" : "NO") << "\n"
-    << fmt("%.2f", since(t0)) << " s\n";
+    << fmt("%.2f", t0.seconds()) << " s\n";
   std::cout << t.str();
   std::ostringstream j;
   j << "{\"study\": \"" << name << "\", \"units\": \"mm\", \"cylinder_radius_mm\": " << o.part.radius

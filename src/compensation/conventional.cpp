@@ -4,13 +4,14 @@
 #include <stdexcept>
 
 #include "probecomp/cad/locator.hpp"
+#include "probecomp/error.hpp"
 
 namespace probecomp::compensation {
 
 std::vector<Point3> conventional_contact_points(std::span<const Point3> centres, std::span<const Vector3> approach_normals,
                                                 double probe_radius) {
   if (centres.size() != approach_normals.size()) {
-    throw std::invalid_argument("conventional compensation needs one approach normal per point");
+    throw InputError("conventional compensation needs one approach normal per point");
   }
   std::vector<Point3> out(centres.size());
   for (std::size_t i = 0; i < centres.size(); ++i) {

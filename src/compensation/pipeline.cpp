@@ -3,18 +3,19 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
-#include <stdexcept>
 
-#include "probecomp/nurbs/degree_elevation.hpp"
-#include "probecomp/cad/locator.hpp"
-#include "probecomp/cad/offset_model.hpp"
 #include "probecomp/compensation/contact.hpp"
 #include "probecomp/compensation/conventional.hpp"
 #include "probecomp/compensation/outliers.hpp"
+#include "probecomp/error.hpp"
+#include "probecomp/geometry/statistics.hpp"
+#include "probecomp/geometry/stopwatch.hpp"
 #include "probecomp/nurbs/closest_point.hpp"
+#include "probecomp/nurbs/degree_elevation.hpp"
+#include "probecomp/registration/routes.hpp"
 
 namespace probecomp::compensation {
 
@@ -29,9 +30,6 @@ nurbs::Surface fit_start(const nurbs::Surface& offset_face, const geometry::Rigi
   if (s.q() < 2) s = nurbs::elevate_degree_v(s, 3 - s.q());
   return s;
 }
-
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Fits made at most per face while peeling outliers off (each refit follows a change in the points left out).
 constexpr int kMaxOutlierFits = 4;
@@ -77,17 +75,16 @@ void check_points_near(const cad::ModelLocator& locator, std::span<const Point3>
   }
   // 257 points give the median to within a few per cent of the distribution: plenty for a gross check.
   std::vector<Point3> subset = spread_subset(points, 257);
-  if (subset.empty()) throw std::invalid_argument("no finite points to compensate");
+  if (subset.empty()) throw InputError("no finite points to compensate");
   const geometry::RigidTransform to_cad = initial.inverse();
   for (Point3& p : subset) p = to_cad * p;
   const std::vector<cad::ModelPoint> feet = locator.closest_points(subset);
   std::vector<double> d;
   for (const cad::ModelPoint& m : feet) d.push_back(m.ok() ? std::abs(m.distance) : std::numeric_limits<double>::infinity());
-  const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
-  std::nth_element(d.begin(), mid, d.end());
+  const double median = geometry::upper_median_in_place(d);
   const double limit = fraction * box.diagonal();
-  if (!(*mid <= limit)) {
-    throw std::invalid_argument("the points are nowhere near the model: their median distance from it is " + mm(*mid) +
+  if (!(median <= limit)) {
+    throw InputError("the points are nowhere near the model: their median distance from it is " + mm(median) +
                                 " mm, more than " + mm(limit) + " mm (" + mm(100 * fraction) +
                                 " % of its size); check the CAD file, the frame and the units");
   }
@@ -95,7 +92,7 @@ void check_points_near(const cad::ModelLocator& locator, std::span<const Point3>
 
 void check_registration(const registration::RegistrationResult& r) {
   if (r.status == registration::Status::TooFewPoints || r.status == registration::Status::NumericalError) {
-    throw std::invalid_argument(std::string("registration failed (") + registration::to_string(r.status) + "): " +
+    throw RegistrationError(std::string("registration failed (") + registration::to_string(r.status) + "): " +
                                 r.stop_reason);
   }
 }
@@ -105,6 +102,21 @@ double signed_distance(const cad::Face& face, const Point3& x, const nurbs::Clos
   const nurbs::UnitNormal n = nurbs::unit_normal(face.surface, foot.u, foot.v);
   const double side = (x - foot.point).dot(static_cast<double>(face.outward) * n.n);
   return side < 0.0 ? -foot.distance : foot.distance;
+}
+
+// Why a face's fit stopped, in one line.
+std::string fit_stop_reason(const fitting::AdaptiveFitResult& fit, const fitting::AdaptiveFitOptions& options) {
+  using S = fitting::AdaptiveFitResult::Status;
+  switch (fit.status) {
+    case S::OK: return "every span's residuals are consistent with the noise estimate";
+    case S::NoiseNotReached:
+      return std::to_string(fit.spans_above_noise) + " span(s) still above the noise: " +
+             (fit.rounds >= options.max_rounds ? "the refinement rounds ran out"
+                                               : "the points support no more control points");
+    case S::NotDone: return "the fit could not be set up (too few usable points for its control points)";
+    case S::NumericalError: return "the fit's normal equations could not be solved";
+  }
+  return "?";
 }
 
 }  // namespace
@@ -123,129 +135,114 @@ const char* to_string(PointStatus s) {
   return "?";
 }
 
-int CompensationResult::count(PointStatus s) const {
-  return static_cast<int>(std::count_if(points.begin(), points.end(), [s](const auto& p) { return p.status == s; }));
+Statistics statistics(std::span<const CompensatedPoint> points) {
+  Statistics st;
+  st.total = static_cast<int>(points.size());
+  double sum = 0.0, sum2 = 0.0;
+  int n = 0;
+  st.deviation_min = std::numeric_limits<double>::infinity();
+  st.deviation_max = -std::numeric_limits<double>::infinity();
+  for (const CompensatedPoint& p : points) {
+    ++st.counts[static_cast<int>(p.status)];
+    if (p.status != PointStatus::Ok) continue;
+    ++n;
+    sum += p.deviation;
+    st.deviation_min = std::min(st.deviation_min, p.deviation);
+    st.deviation_max = std::max(st.deviation_max, p.deviation);
+  }
+  if (n == 0) {
+    st.deviation_min = st.deviation_max = 0.0;
+    return st;
+  }
+  st.deviation_mean = sum / n;
+  // Two passes: the spread of micrometre deviations about a mean that may be millimetres is kept exactly.
+  for (const CompensatedPoint& p : points) {
+    if (p.status == PointStatus::Ok) sum2 += (p.deviation - st.deviation_mean) * (p.deviation - st.deviation_mean);
+  }
+  st.deviation_std = std::sqrt(sum2 / n);
+  return st;
 }
 
-CompensationResult compensate(const cad::Model& model, std::span<const Point3> raw,
-                              std::optional<std::span<const Vector3>> approach_normals,
-                              const CompensateOptions& options) {
-  const double r = options.probe_radius;
-  if (!(r > 0.0) || !std::isfinite(r)) throw std::invalid_argument("the probe radius must be a positive number of mm");
-  if (raw.empty()) throw std::invalid_argument("no points to compensate");
-  if (model.faces.empty()) throw std::invalid_argument("the CAD model has no faces");
-  if (approach_normals && approach_normals->size() != raw.size()) {
-    throw std::invalid_argument("the approach normals do not match the points in number");
+PreparedModel prepare_model(const cad::Model& model, double probe_radius, std::span<const Point3> raw,
+                            std::optional<std::span<const Vector3>> approach_normals, const PrepareOptions& options) {
+  if (!(probe_radius > 0.0) || !std::isfinite(probe_radius)) {
+    throw InputError("the probe radius must be a positive number of mm");
   }
-  if (options.method == Method::Conventional && !approach_normals) {
-    throw std::invalid_argument(
-        "--method conventional needs the approach normals (columns i,j,k, or DMIS points with i,j,k); the input has "
-        "none: use --method cad, which does not need them");
-  }
-  auto stage = [&](const std::string& name, double fraction) {
-    if (options.progress) options.progress(name, fraction);
-  };
+  if (model.faces.empty()) throw InputError("the CAD model has no faces");
+  const geometry::Stopwatch clock;
+  PreparedModel p;
+  p.probe_radius = probe_radius;
+  p.nominal = model;  // a copy: the material side is decided into its faces' `outward`
+  p.material = cad::decide_material_side(p.nominal, raw, approach_normals, options.initial);
+  auto offset = std::make_unique<cad::OffsetModel>(cad::offset_model(p.nominal, probe_radius, options.offset));
+  p.locator = std::make_unique<cad::ModelLocator>(offset->model);
+  p.offset = std::move(offset);
+  p.seconds = clock.seconds();
+  return p;
+}
 
-  CompensationResult out;
-  out.method = options.method;
-  out.points.resize(raw.size());
-  std::map<int, FaceReport> reports;  // by position in model.faces
+registration::RegistrationResult register_centres(const PreparedModel& prepared, std::span<const Point3> raw,
+                                                  const RegisterOptions& options) {
+  check_points_near(*prepared.locator, raw, options.icp.initial, options.max_initial_distance_fraction);
+  registration::RegistrationResult r =
+      registration::register_to_offset_model(*prepared.offset, *prepared.locator, raw, options.icp);
+  check_registration(r);
+  return r;
+}
 
-  if (options.method == Method::Conventional) {
-    stage("registration", 0.0);
-    auto t0 = Clock::now();
-    const std::vector<Point3> contacts = conventional_contact_points(raw, *approach_normals, r);
-    const cad::ModelLocator locator(model);
-    check_points_near(locator, contacts, options.registration.initial, options.max_initial_distance_fraction);
-    out.registration = registration::register_points(locator, contacts, options.registration);
-    check_registration(out.registration);
-    out.seconds.registration = since(t0);
-    for (std::size_t k = 0; k < raw.size(); ++k) {
-      const registration::PointMatch& m = out.registration.matches[k];
-      CompensatedPoint& c = out.points[k];
-      if (!m.ok() || !contacts[k].allFinite()) continue;
-      c.status = m.on_edge ? PointStatus::Edge : PointStatus::Ok;
-      c.contact = contacts[k];
-      c.normal = (*approach_normals)[k].normalized();
-      c.deviation = m.distance;
-      c.face = model.faces[static_cast<std::size_t>(m.face)].index;
-      FaceReport& rep = reports[m.face];
-      rep.face = c.face;
-      rep.outward = model.faces[static_cast<std::size_t>(m.face)].outward;
-      ++rep.points;
-    }
-    for (auto& [f, rep] : reports) out.faces.push_back(std::move(rep));
-    return out;
-  }
-
-  // --- CAD-based method --- (on a copy: the material side is decided into its faces' `outward`)
-  stage("material side", 0.0);
-  auto t0 = Clock::now();
-  cad::Model work = model;
-  out.material = cad::decide_material_side(work, raw, approach_normals, options.registration.initial);
-  out.seconds.material_side = since(t0);
-
-  stage("offset model", 0.05);
-  t0 = Clock::now();
-  const cad::OffsetModel offset = cad::offset_model(work, r, options.offset);
-  const cad::ModelLocator locator(offset.model);
-  out.seconds.offset = since(t0);
-
-  stage("registration", 0.15);
-  t0 = Clock::now();
-  check_points_near(locator, raw, options.registration.initial, options.max_initial_distance_fraction);
-  out.registration = registration::register_to_offset_model(offset, locator, raw, options.registration);
-  check_registration(out.registration);
-  const geometry::RigidTransform T = out.registration.transform;
-  out.seconds.registration = since(t0);
-
-  // Points by face (their correspondences); edge points are compensated towards the edge, never fitted.
-  std::map<int, std::vector<std::size_t>> by_face;
+FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
+                    const registration::RegistrationResult& registration, const FitOptions& options,
+                    const StepProgress& progress) {
+  const geometry::Stopwatch clock;
+  const cad::Model& work = prepared.nominal;
+  const geometry::RigidTransform& T = registration.transform;
+  // Points by face (their correspondences); edge points count in their face's report but are never fitted.
+  std::map<int, FaceFit> by_face;
   for (std::size_t k = 0; k < raw.size(); ++k) {
-    const registration::PointMatch& m = out.registration.matches[k];
+    const registration::PointMatch& m = registration.matches[k];
     if (!m.ok() || !raw[k].allFinite()) continue;
-    FaceReport& rep = reports[m.face];
-    ++rep.points;
-    CompensatedPoint& c = out.points[k];
-    c.face = work.faces[static_cast<std::size_t>(m.face)].index;
-    if (m.on_edge) {
-      const Point3 edge = T * nurbs::evaluate(work.faces[static_cast<std::size_t>(m.face)].surface, m.u, m.v);
-      c.status = PointStatus::Edge;
-      c.normal = (raw[k] - edge).normalized();
-      c.contact = raw[k] - r * c.normal;
-    } else {
-      by_face[m.face].push_back(k);
-    }
+    FaceFit& ff = by_face[m.face];
+    ++ff.report.points;
+    if (!m.on_edge) ff.members.push_back(k);
   }
 
-  stage("fitting", 0.35);
-  t0 = Clock::now();
-  double compensation_seconds = 0.0;
   std::size_t done = 0;
-  for (const auto& [f, members] : by_face) {
+  for (auto& [f, ff] : by_face) {
+    ff.face = f;
     const cad::Face& face = work.faces[static_cast<std::size_t>(f)];
-    FaceReport& rep = reports[f];
-    const nurbs::Surface start = fit_start(offset.model.faces[static_cast<std::size_t>(f)].surface, T);
+    FaceReport& rep = ff.report;
+    rep.face = face.index;
+    rep.outward = face.outward;
+    rep.material = prepared.material[static_cast<std::size_t>(f)].source;
+    // A face that had no points nearest to it before registration kept the file's orientation.
+    if (rep.material == cad::MaterialSource::NoPoints) rep.material = cad::MaterialSource::File;
+    const std::vector<std::size_t>& members = ff.members;
+    const nurbs::Surface start = fit_start(prepared.offset->model.faces[static_cast<std::size_t>(f)].surface, T);
     const double needed = options.min_points_per_control_point * start.num_u() * start.num_v();
     std::vector<Point3> pts;
-    std::vector<fitting::SurfaceParameter> params;
     pts.reserve(members.size());
-    params.reserve(members.size());
+    ff.params.reserve(members.size());
     for (std::size_t k : members) {
       pts.push_back(raw[k]);
-      params.push_back({out.registration.matches[k].u, out.registration.matches[k].v});
+      ff.params.push_back({registration.matches[k].u, registration.matches[k].v});
     }
-    std::optional<fitting::AdaptiveFitResult> fit;
+    const std::vector<fitting::SurfaceParameter>& params = ff.params;
+    std::optional<fitting::AdaptiveFitResult>& fit = ff.fit;
     std::vector<double> weights(members.size(), 1.0);
     std::vector<char> gross(members.size(), 0);
     std::vector<std::uint32_t> neighbours;
     double bound = 0.0;
+    auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at) {
+      fit = fitting::fit_surface(from, pts, at, weights, options.surface, neighbours);
+      ++rep.fits;
+      rep.rounds += fit->rounds;
+    };
     if (static_cast<double>(members.size()) >= needed) {
       // Gross outliers first, from their neighbours, so that the fit's refinement never chases them.
       std::vector<double> residuals(members.size());
       std::vector<Vector3> normals(members.size());
       tbb::parallel_for(std::size_t{0}, members.size(), [&](std::size_t i) {
-        residuals[i] = out.registration.matches[members[i]].distance;
+        residuals[i] = registration.matches[members[i]].distance;
         normals[i] = T.linear() * nurbs::unit_normal(face.surface, params[i].u, params[i].v).n;
       });
       LocalOutliers local = local_outliers(pts, residuals, normals, options.gross_outliers);
@@ -262,8 +259,12 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
       for (int attempt = 0; attempt < kMaxOutlierFits; ++attempt) {
         // A refit starts from the last fit, whose knots already follow the shape: it seldom needs a round of
         // refinement, where starting over would repeat them all.
-        fit = attempt == 0 ? fitting::fit_surface(start, pts, params, weights, options.fit, neighbours)
-                           : fitting::fit_surface(fit->surface, pts, fit->params, weights, options.fit, neighbours);
+        if (attempt == 0) {
+          refit(start, params);
+        } else {
+          const fitting::AdaptiveFitResult last = std::move(*fit);
+          refit(last.surface, last.params);
+        }
         if (!fit->fitted()) break;
         bound = std::max(options.outlier_sigmas * fit->noise_sigma, options.min_outlier_residual);
         int flagged = 0;
@@ -293,7 +294,8 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
       }
       // Without a refit (the points could not move the fit measurably) their residuals stand as they are.
       if (!second_chance.empty() && moves_fit(largest, members.size(), *fit)) {
-        fit = fitting::fit_surface(fit->surface, pts, fit->params, weights, options.fit, neighbours);
+        const fitting::AdaptiveFitResult last = std::move(*fit);
+        refit(last.surface, last.params);
       }
       if (fit->fitted()) {
         for (std::size_t i : second_chance) {
@@ -302,25 +304,70 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
       }
     }
     rep.fitted = fit && fit->fitted();
-    const auto tc = Clock::now();
+    ff.trusted.resize(members.size());
+    for (std::size_t i = 0; i < members.size(); ++i) ff.trusted[i] = weights[i] > 0.0;
     if (rep.fitted) {
       rep.fit_status = fit->status;
+      rep.stop_reason = fit_stop_reason(*fit, options.surface);
       rep.control_points = fit->control_points;
-      rep.rounds = fit->rounds;
       rep.rms = fit->rms;
       rep.max_residual = fit->max_residual;
       rep.noise_sigma = fit->noise_sigma;
       rep.centre_surface = fit->surface;
-      const std::vector<ContactPoint> contacts = contact_points(fit->surface, face.outward, r, pts, fit->params);
+      ff.params = fit->params;
+    } else if (fit) {
+      rep.fit_status = fit->status;
+      rep.stop_reason = fit_stop_reason(*fit, options.surface) + "; its points are offset along the nominal normal";
+      fit.reset();
+    } else {
+      rep.stop_reason = "not fitted: " + std::to_string(members.size()) + " points off the edges for " +
+                        std::to_string(start.num_u() * start.num_v()) + " control points (" + mm(needed) +
+                        " needed); its points are offset along the nominal normal";
+    }
+    done += members.size();
+    if (progress) progress(static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(raw.size(), 1)));
+  }
+  FitResult out;
+  out.faces.reserve(by_face.size());
+  for (auto& [f, ff] : by_face) out.faces.push_back(std::move(ff));
+  out.seconds = clock.seconds();
+  return out;
+}
+
+std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, std::span<const Point3> raw,
+                                                const registration::RegistrationResult& registration,
+                                                const FitResult& fits) {
+  const cad::Model& work = prepared.nominal;
+  const double r = prepared.probe_radius;
+  const geometry::RigidTransform& T = registration.transform;
+  std::vector<CompensatedPoint> out(raw.size());
+  // Edge points: towards the edge.
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    const registration::PointMatch& m = registration.matches[k];
+    if (!m.ok() || !raw[k].allFinite()) continue;
+    CompensatedPoint& c = out[k];
+    c.face = work.faces[static_cast<std::size_t>(m.face)].index;
+    if (m.on_edge) {
+      const Point3 edge = T * nurbs::evaluate(work.faces[static_cast<std::size_t>(m.face)].surface, m.u, m.v);
+      c.status = PointStatus::Edge;
+      c.normal = (raw[k] - edge).normalized();
+      c.contact = raw[k] - r * c.normal;
+    }
+  }
+  for (const FaceFit& ff : fits.faces) {
+    const cad::Face& face = work.faces[static_cast<std::size_t>(ff.face)];
+    const std::vector<std::size_t>& members = ff.members;
+    if (ff.report.fitted) {
+      std::vector<Point3> pts(members.size());
+      for (std::size_t i = 0; i < members.size(); ++i) pts[i] = raw[members[i]];
+      const std::vector<ContactPoint> contacts = contact_points(ff.fit->surface, face.outward, r, pts, ff.params);
       for (std::size_t i = 0; i < members.size(); ++i) {
-        CompensatedPoint& c = out.points[members[i]];
+        CompensatedPoint& c = out[members[i]];
         if (!contacts[i].ok()) {
           c.status = PointStatus::Failed;
           continue;
         }
-        const bool trusted = weights[i] > 0.0;
-        c.status = trusted ? PointStatus::Ok : PointStatus::Outlier;
-        rep.outliers += trusted ? 0 : 1;
+        c.status = ff.trusted[i] ? PointStatus::Ok : PointStatus::Outlier;
         c.contact = contacts[i].contact;
         c.normal = contacts[i].normal;
       }
@@ -328,30 +375,23 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
       // Too few points (or a fit that could not be made): the registered nominal normal.
       const Eigen::Matrix3d R = T.linear();
       for (std::size_t i = 0; i < members.size(); ++i) {
-        CompensatedPoint& c = out.points[members[i]];
-        const nurbs::UnitNormal n = nurbs::unit_normal(face.surface, params[i].u, params[i].v);
+        CompensatedPoint& c = out[members[i]];
+        const nurbs::UnitNormal n = nurbs::unit_normal(face.surface, ff.params[i].u, ff.params[i].v);
         c.status = PointStatus::FewPoints;
         c.normal = R * (static_cast<double>(face.outward) * n.n);
         c.contact = raw[members[i]] - r * c.normal;
       }
     }
-    compensation_seconds += since(tc);
-    done += members.size();
-    stage("fitting", 0.35 + 0.5 * static_cast<double>(done) / static_cast<double>(raw.size()));
   }
-  out.seconds.fitting = since(t0) - compensation_seconds;
-  out.seconds.compensation = compensation_seconds;
 
-  stage("deviation", 0.9);
-  t0 = Clock::now();
-  // Newton from the correspondence's (u, v) (nominal and offset faces share their parametrisation), with the
-  // face's global search where Newton fails.
+  // Deviations: Newton from the correspondence's (u, v) (nominal and offset faces share their parametrisation),
+  // with the face's global search where Newton fails.
   const geometry::RigidTransform to_cad = T.inverse();
   std::vector<char> retry(raw.size(), 0);
   tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
-    CompensatedPoint& c = out.points[k];
+    CompensatedPoint& c = out[k];
     if (!c.computed()) return;
-    const registration::PointMatch& m = out.registration.matches[k];
+    const registration::PointMatch& m = registration.matches[k];
     const cad::Face& face = work.faces[static_cast<std::size_t>(m.face)];
     const Point3 x = to_cad * c.contact;
     const nurbs::ClosestPointResult foot = nurbs::refine_closest_point(face.surface, x, m.u, m.v);
@@ -364,25 +404,114 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   std::map<int, nurbs::ClosestPointSolver> solvers;  // built for the faces that need one
   for (std::size_t k = 0; k < raw.size(); ++k) {
     if (!retry[k]) continue;
-    const registration::PointMatch& m = out.registration.matches[k];
+    const registration::PointMatch& m = registration.matches[k];
     const cad::Face& face = work.faces[static_cast<std::size_t>(m.face)];
     const nurbs::ClosestPointSolver& solver = solvers.try_emplace(m.face, face.surface).first->second;
-    const Point3 x = to_cad * out.points[k].contact;
+    const Point3 x = to_cad * out[k].contact;
     const nurbs::ClosestPointResult foot = solver.closest_point(x);
     if (foot.ok()) {
-      out.points[k].deviation = signed_distance(face, x, foot);
+      out[k].deviation = signed_distance(face, x, foot);
     } else {
-      out.points[k].status = PointStatus::Failed;
+      out[k].status = PointStatus::Failed;
     }
   }
-  out.seconds.deviation = since(t0);
-  for (auto& [f, rep] : reports) {
-    rep.face = work.faces[static_cast<std::size_t>(f)].index;
-    rep.outward = work.faces[static_cast<std::size_t>(f)].outward;
-    if (!out.material.empty()) rep.material = out.material[static_cast<std::size_t>(f)].source;
+  return out;
+}
+
+namespace {
+
+CompensationResult compensate_conventional(const cad::Model& model, std::span<const Point3> raw,
+                                           std::span<const Vector3> approach_normals, const CompensateOptions& options) {
+  CompensationResult out;
+  out.method = Method::Conventional;
+  out.points.resize(raw.size());
+  if (options.progress) options.progress("registration", 0.0);
+  const geometry::Stopwatch clock;
+  const std::vector<Point3> contacts = conventional_contact_points(raw, approach_normals, options.probe_radius);
+  const cad::ModelLocator locator(model);
+  check_points_near(locator, contacts, options.registration.initial, options.max_initial_distance_fraction);
+  out.registration = registration::register_points(locator, contacts, options.registration);
+  check_registration(out.registration);
+  out.seconds.registration = clock.seconds();
+  std::map<int, FaceReport> reports;  // by position in model.faces
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    const registration::PointMatch& m = out.registration.matches[k];
+    CompensatedPoint& c = out.points[k];
+    if (!m.ok() || !contacts[k].allFinite()) continue;
+    const cad::Face& face = model.faces[static_cast<std::size_t>(m.face)];
+    c.status = m.on_edge ? PointStatus::Edge : PointStatus::Ok;
+    c.contact = contacts[k];
+    c.normal = approach_normals[k].normalized();
+    c.deviation = m.distance;
+    c.face = face.index;
+    FaceReport& rep = reports[m.face];
+    rep.face = c.face;
+    rep.outward = face.outward;
+    rep.material = face.material_known ? cad::MaterialSource::Solid : cad::MaterialSource::File;
+    rep.stop_reason = "not fitted: the conventional method offsets along the approach normals";
+    ++rep.points;
+  }
+  for (auto& [f, rep] : reports) out.faces.push_back(std::move(rep));
+  return out;
+}
+
+}  // namespace
+
+CompensationResult compensate(const cad::Model& model, std::span<const Point3> raw,
+                              std::optional<std::span<const Vector3>> approach_normals,
+                              const CompensateOptions& options) {
+  const double r = options.probe_radius;
+  if (!(r > 0.0) || !std::isfinite(r)) throw InputError("the probe radius must be a positive number of mm");
+  if (raw.empty()) throw InputError("no points to compensate");
+  if (model.faces.empty()) throw InputError("the CAD model has no faces");
+  if (approach_normals && approach_normals->size() != raw.size()) {
+    throw InputError("the approach normals do not match the points in number");
+  }
+  if (options.method == Method::Conventional && !approach_normals) {
+    throw InputError(
+        "the conventional method needs each point's approach normal (i,j,k) and the points have none; the CAD-based "
+        "method does not need them");
+  }
+  auto step = [&](const std::string& name, double fraction) {
+    if (options.progress) options.progress(name, fraction);
+  };
+  if (options.method == Method::Conventional) {
+    CompensationResult out = compensate_conventional(model, raw, *approach_normals, options);
+    out.statistics = statistics(out.points);
+    return out;
+  }
+
+  CompensationResult out;
+  out.method = Method::Cad;
+  step("prepare", 0.0);
+  PreparedModel prepared =
+      prepare_model(model, r, raw, approach_normals, {.offset = options.offset, .initial = options.registration.initial});
+  out.seconds.prepare = prepared.seconds;
+  out.material = prepared.material;
+
+  step("registration", 0.15);
+  geometry::Stopwatch clock;
+  out.registration = register_centres(
+      prepared, raw, {.icp = options.registration, .max_initial_distance_fraction = options.max_initial_distance_fraction});
+  out.seconds.registration = clock.restart();
+
+  step("fitting", 0.35);
+  const FitResult fits = fit_faces(prepared, raw, out.registration, options.fit,
+                                   [&](double fraction) { step("fitting", 0.35 + 0.5 * fraction); });
+  out.seconds.fitting = clock.restart();
+
+  step("compensation", 0.85);
+  out.points = compensate_points(prepared, raw, out.registration, fits);
+  out.seconds.compensation = clock.restart();
+  for (const FaceFit& ff : fits.faces) {
+    FaceReport rep = ff.report;
+    for (std::size_t i = 0; i < ff.members.size(); ++i) {
+      rep.outliers += out.points[ff.members[i]].status == PointStatus::Outlier;
+    }
     out.faces.push_back(std::move(rep));
   }
-  stage("done", 1.0);
+  out.statistics = statistics(out.points);
+  step("done", 1.0);
   return out;
 }
 
@@ -394,7 +523,7 @@ std::vector<nurbs::Surface> fitted_part_surfaces(const CompensationResult& resul
     // The contact surface is the centre surface moved by r into the material, against the outward normal.
     const fitting::OffsetResult o = fitting::offset_surface(*f.centre_surface, -probe_radius * f.outward, options);
     if (o.status == fitting::OffsetResult::Status::Degenerate) {
-      throw std::runtime_error("face " + std::to_string(f.face) + ": the fitted surface has no normal somewhere");
+      throw FitError("face " + std::to_string(f.face) + ": the fitted surface has no normal somewhere");
     }
     out.push_back(o.surface);
   }

@@ -10,6 +10,7 @@
 
 #include "probecomp/nurbs/de_casteljau.hpp"
 #include "probecomp/nurbs/normal_cone.hpp"
+#include "probecomp/geometry/parallel.hpp"
 
 namespace probecomp::nurbs {
 
@@ -753,12 +754,8 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
 }
 
 std::vector<ClosestPointResult> ClosestPointSolver::closest_points(std::span<const Point3> queries) const {
-  std::vector<ClosestPointResult> out(queries.size());
-  // Each query is independent and written to its own slot, so the result does not depend on the partition.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, queries.size(), 256), [&](const auto& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i) out[i] = closest_point(queries[i]);
-  });
-  return out;
+  return geometry::parallel_map<ClosestPointResult>(queries.size(), 256,
+                                                    [&](std::size_t i) { return closest_point(queries[i]); });
 }
 
 }  // namespace probecomp::nurbs

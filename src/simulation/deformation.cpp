@@ -9,6 +9,7 @@
 #include "probecomp/fitting/offset.hpp"
 #include "probecomp/fitting/spans.hpp"
 #include "probecomp/nurbs/degree_elevation.hpp"
+#include "probecomp/error.hpp"
 
 namespace probecomp::simulation {
 
@@ -113,7 +114,7 @@ nurbs::Surface deformed_surface(const nurbs::Surface& s, int outward, const Defo
       refined, [&](const Point3& x) { return static_cast<double>(outward) * d.displacement(x); },
       {.tolerance = kDeformedSurfaceTolerance, .samples_per_span = 3, .checks_per_span = 8, .max_rounds = 8});
   if (fit.status == fitting::OffsetResult::Status::Degenerate) {
-    throw std::invalid_argument("deformed surface: the face has no normal somewhere, so it cannot be displaced along it");
+    throw InputError("deformed surface: the face has no normal somewhere, so it cannot be displaced along it");
   }
   return fit.surface;
 }

@@ -4,6 +4,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "probecomp/error.hpp"
+
 namespace probecomp::studies {
 
 namespace {
@@ -16,7 +18,7 @@ constexpr double kAngleToleranceDeg = 1e-9;
 
 AnalyticTouch conventional_touch(const CircleCase& c, double theta_deg) {
   if (!(c.R > 0.0) || !(c.r >= 0.0) || !(std::abs(c.dy) < c.R + c.r)) {
-    throw std::invalid_argument("analytic cylinder: need R > 0, r >= 0 and |dy| < R + r");
+    throw InputError("analytic cylinder: need R > 0, r >= 0 and |dy| < R + r");
   }
   AnalyticTouch out;
   out.theta_deg = theta_deg;

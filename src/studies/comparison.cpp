@@ -1,17 +1,17 @@
 #include "probecomp/studies/comparison.hpp"
 
-#include <chrono>
 #include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
 
+#include "probecomp/error.hpp"
+#include "probecomp/geometry/stopwatch.hpp"
+
 namespace probecomp::studies {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 }  // namespace
 
@@ -56,15 +56,15 @@ std::vector<double> errors_against(const cad::ModelLocator& part, const compensa
 
 MethodComparison compare_methods(const SimulatedMeasurement& m, const ComparisonOptions& options) {
   MethodComparison out;
-  auto t0 = Clock::now();
+  geometry::Stopwatch clock;
   const cad::Model actual = simulation::actual_model(m.nominal, m.deformation, m.placement);
   const cad::ModelLocator actual_locator(actual);
   out.touches = simulation::simulate_touches(
       actual_locator, m.plan, {.probe_radius = m.probe_radius, .noise_sigma = m.noise_sigma, .seed = m.seed});
-  out.simulate_seconds = since(t0);
+  out.simulate_seconds = clock.restart();
   for (std::size_t k = 0; k < out.touches.size(); ++k) {
     if (out.touches[k].status == simulation::Touch::Status::Missed) {
-      throw std::invalid_argument("simulated measurement: programmed point " + std::to_string(k + 1) +
+      throw InputError("simulated measurement: programmed point " + std::to_string(k + 1) +
                                   " misses the actual part");
     }
   }
@@ -78,16 +78,15 @@ MethodComparison compare_methods(const SimulatedMeasurement& m, const Comparison
   compensation::CompensateOptions o = options.compensate;
   o.method = compensation::Method::Cad;
   o.probe_radius = m.probe_radius;
-  t0 = Clock::now();
+  clock.restart();
   out.cad = compensation::compensate(m.nominal, raw,
                                      options.approach_normals ? std::optional<std::span<const Vector3>>(normals)
                                                               : std::nullopt,
                                      o);
-  out.cad_seconds = since(t0);
+  out.cad_seconds = clock.restart();
   o.method = compensation::Method::Conventional;
-  t0 = Clock::now();
   out.conventional = compensation::compensate(m.nominal, raw, std::span<const Vector3>(normals), o);
-  out.conventional_seconds = since(t0);
+  out.conventional_seconds = clock.restart();
 
   out.cad_error = errors_against(actual_locator, out.cad);
   out.conventional_error = errors_against(actual_locator, out.conventional);

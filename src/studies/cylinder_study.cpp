@@ -1,10 +1,10 @@
 #include "probecomp/studies/cylinder_study.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <numbers>
 
 #include "probecomp/nurbs/constructors.hpp"
+#include "probecomp/geometry/stopwatch.hpp"
 
 namespace probecomp::studies {
 
@@ -16,7 +16,7 @@ constexpr double kSmoothingClaimFromSigma = 0.010;
 
 CylinderStudyRow run_row(const cad::Model& nominal, const CylinderStudyOptions& o, const simulation::Deformation& d,
                          const geometry::RigidTransform& placement, double sigma, std::uint64_t seed) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const geometry::Stopwatch clock;
   SimulatedMeasurement m{.nominal = nominal, .deformation = d, .placement = placement,
                          .plan = simulation::grid_plan(nominal.faces.at(0), o.grid, o.grid, o.margin),
                          .probe_radius = o.probe_radius, .noise_sigma = sigma, .seed = seed};
@@ -27,7 +27,7 @@ CylinderStudyRow run_row(const cad::Model& nominal, const CylinderStudyOptions& 
   row.cad = c.cad_summary;
   row.conventional = c.conventional_summary;
   row.cad_untrusted = row.points - c.cad.count(compensation::PointStatus::Ok);
-  row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  row.seconds = clock.seconds();
   return row;
 }
 

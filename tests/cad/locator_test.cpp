@@ -11,13 +11,22 @@
 #include <tbb/task_arena.h>
 
 #include <random>
+#include <type_traits>
 
 #include "probecomp/cad/locator.hpp"
 #include "probecomp/cad/plan.hpp"
+#include "probecomp/compensation/pipeline.hpp"
 #include "support/occt_files.hpp"
 
 namespace probecomp::cad {
 namespace {
+
+// The locators refer to their model and face: built from a temporary they would dangle, so they cannot be.
+static_assert(std::is_constructible_v<ModelLocator, const Model&>);
+static_assert(!std::is_constructible_v<ModelLocator, Model&&>);
+static_assert(!std::is_constructible_v<ModelLocator, Model>);
+static_assert(!std::is_constructible_v<TrimmedFaceLocator, Face&&>);
+static_assert(!std::is_copy_constructible_v<compensation::PreparedModel>);
 
 const std::filesystem::path kCadDir = PROBECOMP_TEST_CAD_DIR;
 

@@ -20,9 +20,14 @@ awk -F, 'NR==1{print $0",id"; next} {print $0","NR-1}' "$W/demo/raw.csv" >"$W/ra
 check "[ \$(wc -l <'$W/out.csv') -eq \$(wc -l <'$W/raw_id.csv') ]" "one output row per input row"
 check "head -1 '$W/out.csv' | grep -q '^x,y,z,nx,ny,nz,deviation,face,status,id$'" "output header"
 check "tail -1 '$W/out.csv' | grep -q ',ok,7200$'" "last row carries its id"
-for key in '"transform"' '"registration"' '"converged": true' '"control_points"' '"noise_estimate"' '"counts"' '"seconds"'; do
+for key in '"transform"' '"registration": {"converged": true, "status": "converged", "stop_reason": "' \
+           '"control_points"' '"noise_estimate"' '"counts"' '"deviation": {"points": 7200' \
+           '"timings": {"read": [0-9.]*, "prepare": [0-9.]*, "register": [0-9.]*, "fit": [0-9.]*, "compensate": [0-9.]*, "write": [0-9.]*, "total": [0-9.]*}'; do
   check "grep -q '$key' '$W/stats.json'" "stats has $key"
 done
+# The face holds every point and its side was decided from them: never "no-points".
+check "grep -q '\"points\": 7200, \"fitted\": true, \"material_side\": \"approach-normals\"' '$W/stats.json'" "face's material side from the approach normals"
+check "! grep -q 'no-points' '$W/stats.json'" "no face with points reports no-points"
 check "grep -q '<table' '$W/report.html'" "report written"
 # DMIS out, then DMIS in: the same points.
 "$P" compensate --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/out.dmo" || fail=1
@@ -54,4 +59,12 @@ expect_error "nowhere near" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/f
 expect_error "no_surfaces.stp" "$W/o.csv" "$P" compensate --cad "$W/no_surfaces.stp" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/o.csv"
 expect_error "i,j,k" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/no_ijk.csv" --probe-radius 1 --method conventional --output "$W/o.csv"
 expect_error ".igs, .iges" "$W/a.txt" "$P" fit --cad "$N" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/a.txt"
+# The exit status says what kind of failure it was (README, "Exit status").
+status_of() { "$@" >/dev/null 2>&1; echo $?; }
+check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/demo/raw.csv' --probe-radius 0) -eq 2 ]" "exit 2: an option's value"
+check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/nan.csv' --probe-radius 1) -eq 3 ]" "exit 3: bad points"
+check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/far.csv' --probe-radius 1) -eq 3 ]" "exit 3: points nowhere near"
+check "[ \$(status_of '$P' compensate --cad '$W/missing.igs' --points '$W/demo/raw.csv' --probe-radius 1) -eq 4 ]" "exit 4: CAD file"
+printf 'x,y,z\n10,10,1\n20,10,1\n' >"$W/two.csv"
+check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/two.csv' --probe-radius 1) -eq 5 ]" "exit 5: registration"
 exit $fail

@@ -71,6 +71,71 @@ TEST(Pipeline, NoiseFreeDataAreCompensatedToASmallFractionOfAMicrometre) {
   EXPECT_LE(r.cad_summary.max_abs(), 1e-3);
 }
 
+// compensate() is the composition of the named steps: called one by one they give the same points, and the
+// statistics and face reports say what the points say.
+TEST(Pipeline, TheStepsComposeToCompensate) {
+  const studies::FreeformStudyResult study = studies::run_freeform_study();
+  std::vector<Point3> raw;
+  for (const simulation::Touch& t : study.touches) raw.push_back(t.measured);
+  compensation::CompensateOptions o;
+  o.probe_radius = study.freeform.probe_radius;
+  const compensation::CompensationResult whole = compensation::compensate(study.freeform.nominal, raw, std::nullopt, o);
+
+  const compensation::PreparedModel prepared =
+      compensation::prepare_model(study.freeform.nominal, o.probe_radius, raw, std::nullopt);
+  const registration::RegistrationResult reg = compensation::register_centres(prepared, raw);
+  const compensation::FitResult fits = compensation::fit_faces(prepared, raw, reg);
+  const std::vector<compensation::CompensatedPoint> points = compensation::compensate_points(prepared, raw, reg, fits);
+  ASSERT_EQ(points.size(), whole.points.size());
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    ASSERT_EQ(points[k].status, whole.points[k].status) << k;
+    ASSERT_EQ(points[k].contact, whole.points[k].contact) << k;
+    ASSERT_EQ(points[k].deviation, whole.points[k].deviation) << k;
+  }
+  ASSERT_EQ(fits.faces.size(), 1u);
+  const compensation::FaceReport& face = fits.faces[0].report;
+  EXPECT_TRUE(face.fitted) << face.stop_reason;
+  EXPECT_FALSE(face.stop_reason.empty());
+  // The dent needs refinement: the fit has more control points than the (degree-raised) offset face, so its
+  // rounds over all fits are at least one, and every fit counts.
+  EXPECT_GE(face.fits, 1);
+  EXPECT_GE(face.rounds, 1);
+  EXPECT_GT(face.control_points, prepared.offset->model.faces[0].surface.num_u() * prepared.offset->model.faces[0].surface.num_v());
+  EXPECT_EQ(face.material, cad::MaterialSource::Data);  // no approach normals given: decided from the centres
+
+  // The statistics, recomputed here from the points.
+  const compensation::Statistics& st = whole.statistics;
+  double sum = 0.0, lo = 1e9, hi = -1e9;
+  int ok = 0;
+  for (const auto& p : whole.points) {
+    if (p.status != PointStatus::Ok) continue;
+    ++ok;
+    sum += p.deviation;
+    lo = std::min(lo, p.deviation);
+    hi = std::max(hi, p.deviation);
+  }
+  const double mean = sum / ok;
+  double ss = 0.0;
+  for (const auto& p : whole.points) {
+    if (p.status == PointStatus::Ok) ss += (p.deviation - mean) * (p.deviation - mean);
+  }
+  EXPECT_EQ(st.total, static_cast<int>(raw.size()));
+  EXPECT_EQ(st.count(PointStatus::Ok), ok);
+  EXPECT_NEAR(st.deviation_mean, mean, 1e-12);
+  EXPECT_NEAR(st.deviation_std, std::sqrt(ss / ok), 1e-12);
+  EXPECT_EQ(st.deviation_min, lo);
+  EXPECT_EQ(st.deviation_max, hi);
+}
+
+TEST(Pipeline, RegistrationThatCannotRunIsARegistrationError) {
+  const simulation::FreeformCase c = simulation::paper_freeform_case();
+  // Two points cannot fix six motions.
+  const std::vector<Point3> raw{Point3(10, 10, 1), Point3(20, 10, 1)};
+  compensation::CompensateOptions o;
+  o.probe_radius = 1.0;
+  EXPECT_THROW((void)compensation::compensate(c.nominal, raw, std::nullopt, o), RegistrationError);
+}
+
 TEST(Pipeline, ConventionalMethodWithoutApproachNormalsSaysWhy) {
   const simulation::FreeformCase c = simulation::paper_freeform_case();
   const std::vector<Point3> raw{Point3(0, 0, 1)};
@@ -80,8 +145,10 @@ TEST(Pipeline, ConventionalMethodWithoutApproachNormalsSaysWhy) {
   try {
     (void)compensation::compensate(c.nominal, raw, std::nullopt, o);
     FAIL() << "expected an error";
-  } catch (const std::invalid_argument& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("i,j,k"), std::string::npos) << e.what();
+    // The library speaks of the method, never of a command-line option.
+    EXPECT_EQ(std::string(e.what()).find("--"), std::string::npos) << e.what();
   }
 }
 
@@ -91,7 +158,7 @@ TEST(Pipeline, PointsFarFromTheModelAreAnError) {
   for (int k = 0; k < 100; ++k) raw.emplace_back(1000.0 + k, 0.0, 500.0);
   compensation::CompensateOptions o;
   o.probe_radius = 1.0;
-  EXPECT_THROW((void)compensation::compensate(c.nominal, raw, std::nullopt, o), std::invalid_argument);
+  EXPECT_THROW((void)compensation::compensate(c.nominal, raw, std::nullopt, o), InputError);
 }
 
 // A multi-face part from a real STEP file: the top (a bicubic B-spline) and two trimmed side planes of

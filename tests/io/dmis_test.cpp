@@ -44,7 +44,7 @@ TEST(Dmis, ErrorsNameTheFileAndLine) {
   auto message = [](const std::string& name, const std::string& text) {
     try {
       (void)io::read_point_dmis(write(name, text));
-    } catch (const io::InputError& e) {
+    } catch (const InputError& e) {
       return std::string(e.what());
     }
     return std::string("no error");

@@ -32,7 +32,9 @@ struct ModelPoint {
 // surface's minima inside the trim.
 class TrimmedFaceLocator {
  public:
+  // The face must outlive the locator (a temporary cannot be given).
   explicit TrimmedFaceLocator(const Face& face);
+  explicit TrimmedFaceLocator(const Face&& face) = delete;
   // Only points nearer than `limit` are looked for (the best found so far on other faces); when there is
   // none, the result has status NoneNearer.
   [[nodiscard]] nurbs::ClosestPointResult closest_point(const Point3& query, double limit, bool& on_trim_edge) const;
@@ -53,6 +55,8 @@ class ModelLocator {
  public:
   // The model must outlive the locator. Building it indexes every face (in parallel).
   explicit ModelLocator(const Model& model);
+  // A locator on a temporary model would dangle: it does not compile.
+  explicit ModelLocator(const Model&& model) = delete;
   ~ModelLocator();
 
   [[nodiscard]] const Model& model() const { return *model_; }

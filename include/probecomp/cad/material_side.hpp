@@ -16,7 +16,9 @@ enum class MaterialSource {
   Solid,            // the face bounds a closed solid in the file
   ApproachNormals,  // the approach normals of the points on the face point to one side
   Data,             // the raw centres lie on one side (they are a probe radius off the part, on the probe side)
-  NoPoints,         // nothing to decide from: the file's orientation is kept
+  NoPoints,         // no points were nearest to it: the file's orientation is kept
+  File,             // the file's orientation, kept because nothing decided it (the conventional method, or a face
+                    // that gained points only in registration)
 };
 [[nodiscard]] const char* to_string(MaterialSource s);
 

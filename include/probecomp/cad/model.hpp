@@ -35,10 +35,14 @@ struct Model {
   std::filesystem::path path;
   std::string file_units;  // the length unit the file declares ("mm", "inch", ...); geometry here is in mm
   std::vector<Face> faces;
+
+  // Reads .stp/.step or .igs/.iges (chosen by extension, case-insensitive). Throws CadError for a missing,
+  // unreadable or truncated file, a file that is not STEP/IGES, or one without surfaces.
+  [[nodiscard]] static Model load(const std::filesystem::path& path);
+  [[nodiscard]] int face_count() const { return static_cast<int>(faces.size()); }
 };
 
-// Reads .stp/.step or .igs/.iges (chosen by extension, case-insensitive). Throws CadError for a missing,
-// unreadable or truncated file, a file that is not STEP/IGES, or one without surfaces.
+// The same as Model::load.
 [[nodiscard]] Model read_model(const std::filesystem::path& path);
 
 // Writes the surfaces as untrimmed NURBS: IGES entity 128 or STEP B-spline faces, by the extension of

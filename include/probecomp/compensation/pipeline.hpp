@@ -1,25 +1,31 @@
 #pragma once
-// The whole method (DESIGN.md §2) on a CAD model and a set of raw probe-centre points, as `probecomp compensate`
-// runs it:
-//   cad           material side → offset faces by r → register the raw centres to the offset model → fit each
-//                 face's centre surface through its points (adaptive, outliers removed) → smooth (project on the
-//                 fit) → offset by r along the fitted normal, into the material → deviation from the registered
-//                 nominal;
-//   conventional  c − r·(i,j,k), registered to the nominal; deviation from the registered nominal.
+// The whole method (DESIGN.md §2) on a CAD model and raw probe-centre points, as named steps:
+//   load        cad::Model::load (STEP/IGES) and io::read_points (CSV/DMIS): not here, files are cad/'s and io/'s
+//   prepare     each face's material side, every face offset by r towards the probe, the offset model indexed
+//   register    the raw centres registered to the offset model (robust ICP)
+//   fit         points assigned to faces by their correspondences; each face's centre surface fitted through its
+//               points (adaptive, outliers flagged and left out)
+//   compensate  each point smoothed onto its fit and moved by r along the fitted normal into the material; its
+//               deviation from the registered nominal
+//   write       io/results.hpp (CSV, DMIS, JSON statistics)
+// compensate() composes them; the conventional method (c − r·(i,j,k), registered to the nominal) has one step.
 // Every input point comes back, in order, with a status saying whether it can be trusted.
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
-#include "probecomp/cad/model.hpp"
+#include "probecomp/cad/locator.hpp"
 #include "probecomp/cad/material_side.hpp"
+#include "probecomp/cad/model.hpp"
+#include "probecomp/cad/offset_model.hpp"
 #include "probecomp/compensation/outliers.hpp"
 #include "probecomp/fitting/adaptive.hpp"
 #include "probecomp/fitting/offset.hpp"
-#include "probecomp/registration/routes.hpp"
+#include "probecomp/registration/icp.hpp"
 
 namespace probecomp::compensation {
 
@@ -35,6 +41,9 @@ enum class PointStatus {
   Failed,      // the projection on the fitted surface failed: nothing computed, fields empty
 };
 [[nodiscard]] const char* to_string(PointStatus s);
+// Every status, in the order above (for counts and reports).
+inline constexpr PointStatus kPointStatuses[] = {PointStatus::Ok,        PointStatus::Outlier,    PointStatus::Edge,
+                                                 PointStatus::FewPoints, PointStatus::NotOnModel, PointStatus::Failed};
 
 struct CompensatedPoint {
   PointStatus status = PointStatus::NotOnModel;
@@ -50,36 +59,62 @@ struct FaceReport {
   int points = 0;         // points assigned to the face by their correspondence
   bool fitted = false;    // else its points were offset along the nominal normal (too few for a fit)
   int outward = 1;        // of the fitted surface, as cad::Face::outward
-  cad::MaterialSource material = cad::MaterialSource::NoPoints;
+  cad::MaterialSource material = cad::MaterialSource::File;
   fitting::AdaptiveFitResult::Status fit_status = fitting::AdaptiveFitResult::Status::NotDone;
+  std::string stop_reason;  // one line: why the face's fit stopped where it did, or why it was not fitted
+  int fits = 0;             // fits made (the first, and refits after outliers were left out or taken back)
   int control_points = 0;
-  int rounds = 0;          // knot insertions
-  double rms = 0.0;        // of the fit's residuals, mm
+  int rounds = 0;           // knot insertion rounds over all of the face's fits
+  double rms = 0.0;         // of the last fit's residuals, mm
   double max_residual = 0.0;
   double noise_sigma = 0.0;
   int outliers = 0;
   std::optional<nurbs::Surface> centre_surface;  // the fitted probe-centre surface, machine frame (when fitted)
 };
 
-struct StageSeconds {
-  double material_side = 0.0, offset = 0.0, registration = 0.0, fitting = 0.0, compensation = 0.0, deviation = 0.0;
-};
+// --- prepare ---
 
-struct CompensationResult {
-  Method method = Method::Cad;
-  registration::RegistrationResult registration;  // transform: CAD to machine
-  std::vector<cad::MaterialSide> material;
-  std::vector<CompensatedPoint> points;  // one per input point, in order
-  std::vector<FaceReport> faces;         // faces that hold points, by index
-  StageSeconds seconds;
-  [[nodiscard]] int count(PointStatus s) const;
-};
-
-struct CompensateOptions {
-  Method method = Method::Cad;
-  double probe_radius = 0.0;  // mm, > 0
-  registration::RegistrationOptions registration;
+struct PrepareOptions {
   fitting::OffsetOptions offset;
+  // The first guess of the transform CAD → machine, for the material side's votes (usually the identity).
+  geometry::RigidTransform initial = geometry::RigidTransform::Identity();
+};
+
+// The model the points are registered to. Movable, not copyable: the locator refers to the offset model, and
+// both live on the heap so that a move keeps that reference valid.
+struct PreparedModel {
+  double probe_radius = 0.0;
+  cad::Model nominal;                        // the input model, each face's `outward` its decided material side
+  std::vector<cad::MaterialSide> material;   // per face of `nominal`: what decided it
+  std::unique_ptr<const cad::OffsetModel> offset;    // every face of `nominal` offset by +r
+  std::unique_ptr<const cad::ModelLocator> locator;  // closest points on offset->model
+  double seconds = 0.0;
+};
+
+// Throws InputError for a non-positive radius or a model without faces.
+[[nodiscard]] PreparedModel prepare_model(const cad::Model& model, double probe_radius, std::span<const Point3> raw_centres,
+                                          std::optional<std::span<const Vector3>> approach_normals,
+                                          const PrepareOptions& options = {});
+
+// --- register ---
+
+struct RegisterOptions {
+  registration::RegistrationOptions icp;
+  // Points whose first closest point on the model is farther than this fraction of the model's size are
+  // "nowhere near the model" (wrong file, frame or unit): the run stops with an InputError.
+  double max_initial_distance_fraction = 0.1;
+};
+
+// The raw centres registered to the prepared offset model. Throws InputError when the points are nowhere near
+// the model and RegistrationError when ICP could not run (too few points, numerical failure); a registration
+// that ran but did not converge comes back with its status and stop reason.
+[[nodiscard]] registration::RegistrationResult register_centres(const PreparedModel& prepared,
+                                                                std::span<const Point3> raw_centres,
+                                                                const RegisterOptions& options = {});
+
+// --- fit ---
+
+struct FitOptions {
   // The face fit. Three departures from the fitter's defaults, measured on the cylinder studies (10 000 points,
   // a local sine of 1.5 mm peak, σ = 40 µm) and the free-form case:
   //  - smoothness 1e-3 (not 1e-6): refinement leaves thin spans at the data's edges holding few points, which
@@ -91,7 +126,7 @@ struct CompensateOptions {
   //  - no parameter correction: projecting the points on the fit lets those at the data's corners slide out
   //    into the ill-determined spans (largest error 0.36 mm with two corrections at σ = 10 µm, 0.017 mm
   //    without), and the registration's (u, v) serve as well elsewhere at half the fitting time.
-  fitting::AdaptiveFitOptions fit{.fit = {.smoothness = 1e-3, .max_iterations = 1}, .parameter_corrections = 0};
+  fitting::AdaptiveFitOptions surface{.fit = {.smoothness = 1e-3, .max_iterations = 1}, .parameter_corrections = 0};
   // A face is fitted when it holds at least this many points per control point of its offset surface; fewer
   // cannot average the noise out (its points fall back to the nominal normal).
   double min_points_per_control_point = 2.0;
@@ -103,22 +138,90 @@ struct CompensateOptions {
   // ... and beyond this (mm): on noise-free data the fit's own model error (a few tenths of a micrometre where
   // refinement stopped) must not read as outliers. 2 µm is below any gross error and above that model error.
   double min_outlier_residual = 0.002;
-  // Points whose first closest point on the model is farther than this fraction of the model's size are
-  // "nowhere near the model" (wrong file, frame or unit): the run stops with an error.
-  double max_initial_distance_fraction = 0.1;
-  // Called at the start of each stage with the fraction of the run done (0–1); may be empty.
-  std::function<void(const std::string& stage, double fraction)> progress;
 };
 
-// Throws std::invalid_argument with a one-line cause for input the method cannot use: a non-positive radius,
-// no points, the conventional method without approach normals, points nowhere near the model, a failed
-// registration.
+// One face's points and its fit.
+struct FaceFit {
+  int face = -1;                                   // position in the prepared model's faces
+  std::vector<std::size_t> members;                // input indices of the points fitted on it, ascending
+  std::vector<fitting::SurfaceParameter> params;   // theirs: on the fit when fitted, else the registration's
+  std::vector<char> trusted;                       // per member: 0 where left out as an outlier
+  std::optional<fitting::AdaptiveFitResult> fit;   // when the face was fitted
+  FaceReport report;
+};
+
+struct FitResult {
+  // Every face that holds points, by position. Points whose correspondence is on a face's edge count in its
+  // report but are never fitted (they are compensated towards the edge).
+  std::vector<FaceFit> faces;
+  double seconds = 0.0;
+};
+
+// Called with the fraction of the step done (0–1); may be empty.
+using StepProgress = std::function<void(double fraction)>;
+
+[[nodiscard]] FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw_centres,
+                                  const registration::RegistrationResult& registration, const FitOptions& options = {},
+                                  const StepProgress& progress = {});
+
+// --- compensate ---
+
+// Each point smoothed onto its face's fit and moved by r along the fitted normal into the material (or along the
+// registered nominal normal where the face was not fitted, or towards the edge for edge points), and its signed
+// deviation from the registered nominal. One result per input point, in order.
+[[nodiscard]] std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared,
+                                                              std::span<const Point3> raw_centres,
+                                                              const registration::RegistrationResult& registration,
+                                                              const FitResult& fits);
+
+// --- the whole method ---
+
+// Seconds per step of compensate(); the command line adds reading and writing.
+struct Timings {
+  double prepare = 0.0, registration = 0.0, fitting = 0.0, compensation = 0.0;
+  [[nodiscard]] double total() const { return prepare + registration + fitting + compensation; }
+};
+
+// Counts by status, and the deviations of the trusted (ok) points.
+struct Statistics {
+  int total = 0;
+  int counts[std::size(kPointStatuses)] = {};  // by PointStatus, in the order of kPointStatuses
+  double deviation_mean = 0.0, deviation_std = 0.0, deviation_min = 0.0, deviation_max = 0.0;  // mm, ok points
+  [[nodiscard]] int count(PointStatus s) const { return counts[static_cast<int>(s)]; }
+};
+[[nodiscard]] Statistics statistics(std::span<const CompensatedPoint> points);
+
+struct CompensationResult {
+  Method method = Method::Cad;
+  registration::RegistrationResult registration;  // transform: CAD to machine
+  std::vector<cad::MaterialSide> material;        // per face of the model (CAD method)
+  std::vector<CompensatedPoint> points;           // one per input point, in order
+  std::vector<FaceReport> faces;                  // faces that hold points, by index
+  Statistics statistics;
+  Timings seconds;
+  [[nodiscard]] int count(PointStatus s) const { return statistics.count(s); }
+};
+
+struct CompensateOptions {
+  Method method = Method::Cad;
+  double probe_radius = 0.0;  // mm, > 0
+  registration::RegistrationOptions registration;
+  double max_initial_distance_fraction = 0.1;  // as RegisterOptions
+  fitting::OffsetOptions offset;
+  FitOptions fit;
+  // Called at the start of each step with the fraction of the run done (0–1); may be empty.
+  std::function<void(const std::string& step, double fraction)> progress;
+};
+
+// Throws InputError for input the method cannot use (a non-positive radius, no points, the conventional method
+// without approach normals, points nowhere near the model) and RegistrationError for a registration that could
+// not run.
 [[nodiscard]] CompensationResult compensate(const cad::Model& model, std::span<const Point3> raw_centres,
                                             std::optional<std::span<const Vector3>> approach_normals,
                                             const CompensateOptions& options);
 
 // The fitted part surfaces (contact surfaces, machine frame) of a CAD-method result: each fitted centre surface
-// offset by the probe radius into the material. For `probecomp fit`.
+// offset by the probe radius into the material. Throws FitError where a fitted surface has no normal.
 [[nodiscard]] std::vector<nurbs::Surface> fitted_part_surfaces(const CompensationResult& result, double probe_radius,
                                                                const fitting::OffsetOptions& options = {});
 

@@ -8,15 +8,10 @@
 #include <string>
 #include <vector>
 
+#include "probecomp/error.hpp"
 #include "probecomp/geometry/types.hpp"
 
 namespace probecomp::io {
-
-// A file that cannot be read as points; what() is one line: "FILE:LINE: cause" or "FILE: cause".
-class InputError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 struct PointTable {
   std::vector<std::string> columns;            // every header name, in file order

@@ -7,16 +7,19 @@
 #include <stdexcept>
 #include <vector>
 
+#include "probecomp/error.hpp"
+
 namespace probecomp::nurbs {
 
 // Highest degree the kernel evaluates; stack buffers are sized for it. CAD systems rarely exceed 9;
 // OpenCASCADE allows 25, and the CAD reader reports anything above this bound as unsupported.
 inline constexpr int kMaxDegree = 15;
 
-// Thrown for knot vectors, control nets and parameters that break the kernel's preconditions.
-class InvalidGeometry : public std::invalid_argument {
+// Thrown for knot vectors, control nets and parameters that break the kernel's preconditions (an InputError:
+// geometry handed in that the kernel cannot use).
+class InvalidGeometry : public InputError {
  public:
-  using std::invalid_argument::invalid_argument;
+  using InputError::InputError;
 };
 
 class KnotVector {

@@ -49,7 +49,7 @@ struct MethodComparison {
   double simulate_seconds = 0.0, cad_seconds = 0.0, conventional_seconds = 0.0;
 };
 
-// Throws std::invalid_argument if a programmed point misses the actual part: a study's plan must keep the tip on
+// Throws InputError if a programmed point misses the actual part: a study's plan must keep the tip on
 // its faces.
 [[nodiscard]] MethodComparison compare_methods(const SimulatedMeasurement& m, const ComparisonOptions& options = {});
 

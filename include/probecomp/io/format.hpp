@@ -1,10 +1,10 @@
 #pragma once
-// Number and JSON formatting shared by the commands: lengths with 9 decimals (nm), unit vectors with 12.
+// Number and JSON formatting shared by the result writers and the commands: lengths with 9 decimals (nm), unit vectors with 12.
 
 #include <cstdio>
 #include <string>
 
-namespace probecomp::cli {
+namespace probecomp::io {
 
 inline std::string fmt(const char* format, double value) {
   char buf[64];
@@ -27,4 +27,4 @@ inline std::string json_string(const std::string& s) {
   return out + "\"";
 }
 
-}  // namespace probecomp::cli
+}  // namespace probecomp::io

@@ -1,0 +1,157 @@
+#include "probecomp/io/results.hpp"
+
+#include <algorithm>
+#include <sstream>
+#include <vector>
+
+#include "probecomp/io/dmis.hpp"
+#include "probecomp/io/format.hpp"
+#include "probecomp/io/text.hpp"
+
+namespace probecomp::io {
+
+namespace {
+
+std::string html_escaped(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '&': out += "&amp;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+// The output's label for row k: the input's label or id column, else P1, P2, ...
+std::string row_label(const PointTable& t, std::size_t k) {
+  for (std::size_t c = 0; c < t.columns.size(); ++c) {
+    const std::string n = lower(t.columns[c]);
+    if (n == "label" || n == "id") return t.rows[k][c];
+  }
+  std::string label = "P";
+  label += std::to_string(k + 1);
+  return label;
+}
+
+}  // namespace
+
+std::string compensated_csv(const PointTable& t, const compensation::CompensationResult& r) {
+  const std::vector<int> carried = t.carried_columns();
+  const std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "face", "status"};
+  std::ostringstream out;
+  out << "x,y,z,nx,ny,nz,deviation,face,status";
+  for (int c : carried) {
+    const std::string& name = t.columns[static_cast<std::size_t>(c)];
+    out << ',' << (std::find(ours.begin(), ours.end(), name) != ours.end() ? "input_" + name : name);
+  }
+  out << '\n';
+  for (std::size_t k = 0; k < r.points.size(); ++k) {
+    const compensation::CompensatedPoint& p = r.points[k];
+    if (p.computed()) {
+      out << mm(p.contact.x()) << ',' << mm(p.contact.y()) << ',' << mm(p.contact.z()) << ',' << unit(p.normal.x()) << ','
+          << unit(p.normal.y()) << ',' << unit(p.normal.z()) << ',' << mm(p.deviation) << ',' << p.face << ',';
+    } else {
+      // Never dropped: the row is there, empty, with the reason.
+      out << ",,,,,,," << (p.face >= 0 ? std::to_string(p.face) : "") << ',';
+    }
+    out << compensation::to_string(p.status);
+    for (int c : carried) out << ',' << t.rows[k][static_cast<std::size_t>(c)];
+    out << '\n';
+  }
+  return out.str();
+}
+
+std::string compensated_dmis(const PointTable& t, const compensation::CompensationResult& r, const std::string& source) {
+  std::ostringstream out;
+  out << "$$ probecomp " << compensation::to_string(r.method) << " compensation of " << source
+      << ": contact points and the normals used, machine frame, mm\n";
+  out << "$$ after each point: its deviation from the registered nominal (mm, + outside), face and status\n";
+  for (std::size_t k = 0; k < r.points.size(); ++k) {
+    const compensation::CompensatedPoint& p = r.points[k];
+    const std::string label = row_label(t, k);
+    if (p.computed()) {
+      out << dmis_point(label, p.contact, p.normal);
+      out << "$$ deviation=" << mm(p.deviation) << " face=" << p.face << " status=" << compensation::to_string(p.status) << '\n';
+    } else {
+      out << "$$ FA(" << label << ") not compensated: status=" << compensation::to_string(p.status) << '\n';
+    }
+  }
+  return out.str();
+}
+
+std::string statistics_json(const compensation::CompensationResult& r, const FileTimings& files) {
+  std::ostringstream j;
+  const Eigen::Matrix4d M = r.registration.transform.matrix();
+  j << "{\"method\": \"" << compensation::to_string(r.method) << "\",\n \"transform\": [";
+  for (int a = 0; a < 4; ++a) {
+    j << (a ? ",\n               [" : "[");
+    for (int b = 0; b < 4; ++b) j << (b ? ", " : "") << fmt("%.15g", M(a, b));
+    j << "]";
+  }
+  j << "],\n \"registration\": {\"converged\": " << (r.registration.converged() ? "true" : "false") << ", \"status\": \""
+    << registration::to_string(r.registration.status) << "\", \"stop_reason\": " << json_string(r.registration.stop_reason)
+    << ", \"rms\": " << fmt("%.9g", r.registration.rms)
+    << ", \"iterations\": " << r.registration.iterations + r.registration.coarse_iterations
+    << ", \"scale\": " << fmt("%.9g", r.registration.scale) << ", \"inliers\": " << r.registration.inliers << "},\n \"faces\": [";
+  for (std::size_t f = 0; f < r.faces.size(); ++f) {
+    const compensation::FaceReport& x = r.faces[f];
+    j << (f ? ",\n   " : "\n   ") << "{\"face\": " << x.face << ", \"points\": " << x.points
+      << ", \"fitted\": " << (x.fitted ? "true" : "false") << ", \"material_side\": \"" << cad::to_string(x.material)
+      << "\"";
+    if (x.fitted) {
+      j << ", \"control_points\": " << x.control_points << ", \"fits\": " << x.fits
+        << ", \"refinement_rounds\": " << x.rounds << ", \"rms_residual\": " << fmt("%.9g", x.rms)
+        << ", \"max_residual\": " << fmt("%.9g", x.max_residual) << ", \"noise_estimate\": " << fmt("%.9g", x.noise_sigma)
+        << ", \"outliers\": " << x.outliers
+        << ", \"noise_reached\": " << (x.fit_status == fitting::AdaptiveFitResult::Status::OK ? "true" : "false");
+    }
+    j << ", \"stop_reason\": " << json_string(x.stop_reason) << "}";
+  }
+  j << "],\n \"counts\": {";
+  const compensation::Statistics& st = r.statistics;
+  for (std::size_t s = 0; s < std::size(compensation::kPointStatuses); ++s) {
+    j << (s ? ", " : "") << "\"" << compensation::to_string(compensation::kPointStatuses[s]) << "\": " << st.counts[s];
+  }
+  j << ", \"total\": " << st.total << "},\n \"deviation\": {\"points\": " << st.count(compensation::PointStatus::Ok)
+    << ", \"mean\": " << fmt("%.9g", st.deviation_mean) << ", \"std\": " << fmt("%.9g", st.deviation_std)
+    << ", \"min\": " << fmt("%.9g", st.deviation_min) << ", \"max\": " << fmt("%.9g", st.deviation_max) << "}";
+  const compensation::Timings& t = r.seconds;
+  j << ",\n \"timings\": {\"read\": " << fmt("%.4f", files.read) << ", \"prepare\": " << fmt("%.4f", t.prepare)
+    << ", \"register\": " << fmt("%.4f", t.registration) << ", \"fit\": " << fmt("%.4f", t.fitting)
+    << ", \"compensate\": " << fmt("%.4f", t.compensation) << ", \"write\": " << fmt("%.4f", files.write)
+    << ", \"total\": " << fmt("%.4f", files.total) << "}}\n";
+  return j.str();
+}
+
+std::string html_report(const std::string& cad, const std::string& points, const compensation::CompensationResult& r) {
+  std::vector<double> d;
+  for (const auto& p : r.points) {
+    if (p.status == compensation::PointStatus::Ok) d.push_back(p.deviation);
+  }
+  std::sort(d.begin(), d.end());
+  auto quantile = [&](double q) { return d.empty() ? 0.0 : d[static_cast<std::size_t>(q * (d.size() - 1))]; };
+  std::ostringstream h;
+  h << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>probecomp report</title></head><body>\n"
+    << "<h1>probecomp: " << compensation::to_string(r.method) << " compensation</h1>\n<p>CAD: " << html_escaped(cad)
+    << "<br>points: " << html_escaped(points) << " (" << r.points.size() << ")</p>\n"
+    << "<h2>Registration</h2><p>" << registration::to_string(r.registration.status) << ": "
+    << html_escaped(r.registration.stop_reason) << "; RMS " << fmt("%.6f", r.registration.rms) << " mm</p>\n"
+    << "<h2>Deviation of trusted points from the registered nominal (mm)</h2><table border=1>"
+    << "<tr><th>min</th><th>5 %</th><th>median</th><th>95 %</th><th>max</th></tr><tr>";
+  for (double q : {0.0, 0.05, 0.5, 0.95, 1.0}) h << "<td>" << fmt("%.6f", quantile(q)) << "</td>";
+  h << "</tr></table>\n<h2>Faces</h2><table border=1><tr><th>face</th><th>points</th><th>fitted</th><th>control "
+       "points</th><th>rounds</th><th>RMS residual (mm)</th><th>noise (mm)</th><th>outliers</th></tr>\n";
+  for (const auto& f : r.faces) {
+    h << "<tr><td>" << f.face << "</td><td>" << f.points << "</td><td>" << (f.fitted ? "yes" : "no") << "</td><td>"
+      << f.control_points << "</td><td>" << f.rounds << "</td><td>" << fmt("%.6f", f.rms) << "</td><td>"
+      << fmt("%.6f", f.noise_sigma) << "</td><td>" << f.outliers << "</td></tr>\n";
+  }
+  h << "</table></body></html>\n";
+  return h.str();
+}
+
+}  // namespace probecomp::io
