@@ -248,8 +248,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"cad", "conventional"}));
   compensate->add_option("--output", comp.output, "OUT.csv or OUT.dmo (default: CSV on standard output)");
   compensate->add_option("--json", comp.json,
-                         "STATS.json: transform (4x4, CAD to machine), registration, per face fit, counts by status, "
-                         "seconds per stage");
+                         "STATS.json: transform (4x4, CAD to machine), registration, per face fit, counts by status, deviation statistics, "
+                         "timings in seconds");
   compensate->add_option("--report", comp.report, "REPORT.html: a summary for people");
   compensate->add_flag("--quiet", comp.quiet, "No progress on standard error");
 
