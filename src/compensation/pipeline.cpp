@@ -104,6 +104,14 @@ double signed_distance(const cad::Face& face, const Point3& x, const nurbs::Clos
   return side < 0.0 ? -foot.distance : foot.distance;
 }
 
+// What both methods and prepare_model need before anything else.
+void check_model_and_radius(const cad::Model& model, double probe_radius) {
+  if (!(probe_radius > 0.0) || !std::isfinite(probe_radius)) {
+    throw InputError("the probe radius must be a positive number of mm");
+  }
+  if (model.faces.empty()) throw InputError("the CAD model has no faces");
+}
+
 // Why a face's fit stopped, in one line.
 std::string fit_stop_reason(const fitting::AdaptiveFitResult& fit, const fitting::AdaptiveFitOptions& options) {
   using S = fitting::AdaptiveFitResult::Status;
@@ -165,10 +173,7 @@ Statistics statistics(std::span<const CompensatedPoint> points) {
 
 PreparedModel prepare_model(const cad::Model& model, double probe_radius, std::span<const Point3> raw,
                             std::optional<std::span<const Vector3>> approach_normals, const PrepareOptions& options) {
-  if (!(probe_radius > 0.0) || !std::isfinite(probe_radius)) {
-    throw InputError("the probe radius must be a positive number of mm");
-  }
-  if (model.faces.empty()) throw InputError("the CAD model has no faces");
+  check_model_and_radius(model, probe_radius);
   const geometry::Stopwatch clock;
   PreparedModel p;
   p.probe_radius = probe_radius;
@@ -461,9 +466,8 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
                               std::optional<std::span<const Vector3>> approach_normals,
                               const CompensateOptions& options) {
   const double r = options.probe_radius;
-  if (!(r > 0.0) || !std::isfinite(r)) throw InputError("the probe radius must be a positive number of mm");
+  check_model_and_radius(model, r);
   if (raw.empty()) throw InputError("no points to compensate");
-  if (model.faces.empty()) throw InputError("the CAD model has no faces");
   if (approach_normals && approach_normals->size() != raw.size()) {
     throw InputError("the approach normals do not match the points in number");
   }
@@ -496,15 +500,15 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   out.seconds.registration = clock.restart();
 
   step("fitting", 0.35);
-  const FitResult fits = fit_faces(prepared, raw, out.registration, options.fit,
+  FitResult fits = fit_faces(prepared, raw, out.registration, options.fit,
                                    [&](double fraction) { step("fitting", 0.35 + 0.5 * fraction); });
   out.seconds.fitting = clock.restart();
 
   step("compensation", 0.85);
   out.points = compensate_points(prepared, raw, out.registration, fits);
   out.seconds.compensation = clock.restart();
-  for (const FaceFit& ff : fits.faces) {
-    FaceReport rep = ff.report;
+  for (FaceFit& ff : fits.faces) {
+    FaceReport rep = std::move(ff.report);  // the fits are not needed past this point
     for (std::size_t i = 0; i < ff.members.size(); ++i) {
       rep.outliers += out.points[ff.members[i]].status == PointStatus::Outlier;
     }

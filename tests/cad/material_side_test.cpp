@@ -10,34 +10,15 @@
 namespace probecomp::cad {
 namespace {
 
+using probecomp::testing::probe;
+using probecomp::testing::Probed;
 using probecomp::testing::single_face_model;
 
 const geometry::RigidTransform kMisalignment = geometry::from_pose({.rx = -0.5, .ry = 0.8, .rz = 0.4, .t = Vector3(-0.7, 0.4, 0.6)});
 
-struct Probed {
-  std::vector<Point3> contacts, centres;  // machine frame
-  std::vector<Vector3> approach;          // the nominal outward normals the CMM was programmed with
-};
-
-// Probe centres a radius r off the surface on the side `side` (+1: along S_u × S_v), moved by kMisalignment.
-Probed probe(const nurbs::Surface& s, double r, int side, int n) {
-  Probed p;
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < n; ++j) {
-      const double u = 0.05 + 0.9 * i / (n - 1.0), v = 0.05 + 0.9 * j / (n - 1.0);
-      const Vector3 out = side * nurbs::unit_normal(s, u, v).n;
-      const Point3 c = nurbs::evaluate(s, u, v);
-      p.contacts.push_back(kMisalignment * c);
-      p.centres.push_back(kMisalignment * (c + r * out));
-      p.approach.push_back(out);
-    }
-  }
-  return p;
-}
-
 TEST(MaterialSide, FromTheDataAndFromTheApproachNormals) {
   const nurbs::Surface s = testing::random_rational_surface(22, {.nu = 8, .nv = 8, .height = 6.0});
-  const Probed p = probe(s, 1.0, -1, 30);  // probed from the −(S_u × S_v) side
+  const Probed p = probe(kMisalignment, s, 1.0, -1, 30);  // probed from the −(S_u × S_v) side
   for (bool with_normals : {false, true}) {
     cad::Model m = single_face_model(s, +1, false);  // the file's orientation is the wrong one
     std::optional<std::span<const Vector3>> normals;

@@ -19,6 +19,28 @@ inline cad::Model single_face_model(nurbs::Surface s, int outward = 1, bool mate
   return m;
 }
 
+struct Probed {
+  std::vector<Point3> contacts, centres;  // machine frame
+  std::vector<Vector3> approach;          // the nominal outward normals the CMM was programmed with
+};
+
+// An n × n grid of probe centres a radius r off the surface on the side `side` (+1: along S_u × S_v), over
+// (u, v) in [0.05, 0.95]², all moved by `placement` (CAD to machine).
+inline Probed probe(const geometry::RigidTransform& placement, const nurbs::Surface& s, double r, int side, int n) {
+  Probed p;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const double u = 0.05 + 0.9 * i / (n - 1.0), v = 0.05 + 0.9 * j / (n - 1.0);
+      const Vector3 out = side * nurbs::unit_normal(s, u, v).n;
+      const Point3 c = nurbs::evaluate(s, u, v);
+      p.contacts.push_back(placement * c);
+      p.centres.push_back(placement * (c + r * out));
+      p.approach.push_back(out);
+    }
+  }
+  return p;
+}
+
 // n points S(u,v) with (u,v) uniform in [margin, 1 − margin]², and their (u,v).
 inline std::vector<Point3> points_on(const nurbs::Surface& s, int n, double margin, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
