@@ -235,7 +235,7 @@ int main(int argc, char** argv) {
   CLI::App* compensate = app.add_subcommand(
       "compensate",
       "Contact points and deviations from raw probe-centre points: every input row back, in order, with "
-      "x,y,z,nx,ny,nz,deviation,face,status and the input's other columns.");
+      "x,y,z,nx,ny,nz,deviation,u,face,status and the input's other columns (u: the standard uncertainty of the point along its normal, k = 1, mm).");
   compensate->add_option("--cad", comp.cad, "CAD file (.igs, .iges, .stp, .step)")->required();
   compensate->add_option("--points", comp.points,
                          "RAW.csv (header naming x,y,z, optional i,j,k; other columns carried) or RAW.dmo (DMIS "

@@ -44,9 +44,6 @@ bool moves_fit(double largest_residual, std::size_t points, const fitting::Adapt
   return largest_residual / per_control_point > kNegligibleShift * fit.noise_sigma;
 }
 
-// A left-out point is refitted when the fit made without it misses it by at most this many outlier bounds.
-constexpr double kSecondChance = 2.0;
-
 std::string mm(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3g", v);
@@ -234,83 +231,38 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     const std::vector<fitting::SurfaceParameter>& params = ff.params;
     std::optional<fitting::AdaptiveFitResult>& fit = ff.fit;
     std::vector<double> weights(members.size(), 1.0);
-    std::vector<char> gross(members.size(), 0);
-    std::vector<std::uint32_t> neighbours;
-    double bound = 0.0;
     auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at) {
-      fit = fitting::fit_surface(from, pts, at, weights, options.surface, neighbours);
+      fit = fitting::fit_surface(from, pts, at, weights, options.surface);
       ++rep.fits;
       rep.rounds += fit->rounds;
     };
+    std::vector<char> outlier(members.size(), 0);
     if (static_cast<double>(members.size()) >= needed) {
-      // Gross outliers first, from their neighbours, so that the fit's refinement never chases them.
-      std::vector<double> residuals(members.size());
-      std::vector<Vector3> normals(members.size());
-      tbb::parallel_for(std::size_t{0}, members.size(), [&](std::size_t i) {
-        residuals[i] = registration.matches[members[i]].distance;
-        normals[i] = T.linear() * nurbs::unit_normal(face.surface, params[i].u, params[i].v).n;
-      });
-      LocalOutliers local = local_outliers(pts, residuals, normals, options.gross_outliers);
-      gross = std::move(local.outlier);
-      neighbours = std::move(local.nearest);
-      for (std::size_t i = 0; i < members.size(); ++i) {
-        if (gross[i]) weights[i] = 0.0;
-      }
-      // Outliers are found from the fit's own residuals (the deformation is data, not outliers, so the
-      // registration's residuals cannot tell them), left out, and the face refitted, until no new point is
-      // beyond the bound. A point once left out stays out: a fit bent by gross outliers can push good
-      // neighbours beyond the bound too, and those are then reported as outliers (not trusted) rather than
-      // left to oscillate in and out.
+      // Outliers are decided against the fit itself (compensation/outliers.hpp), left out, and the face refitted,
+      // until the set left out no longer changes: a point left out is taken back when the fit made without it
+      // predicts it within its bound (a point a fit bent by a gross error had pushed out), so that the set left
+      // out is the one the final fit agrees with.
       for (int attempt = 0; attempt < kMaxOutlierFits; ++attempt) {
-        // A refit starts from the last fit, whose knots already follow the shape: it seldom needs a round of
-        // refinement, where starting over would repeat them all.
-        if (attempt == 0) {
-          refit(start, params);
-        } else {
-          const fitting::AdaptiveFitResult last = std::move(*fit);
-          refit(last.surface, last.params);
-        }
+        // A refit starts over from the registered offset face: the first fit's refinement and adaptive penalty
+        // may have followed the gross errors it then found, and would keep their marks.
+        refit(start, params);
         if (!fit->fitted()) break;
-        bound = std::max(options.outlier_sigmas * fit->noise_sigma, options.min_outlier_residual);
-        int flagged = 0;
+        outlier = outliers_against_fit(*fit, weights, options.outliers);
+        int changed = 0;
         double largest = 0.0;
         for (std::size_t i = 0; i < members.size(); ++i) {
-          if (weights[i] > 0.0 && std::abs(fit->residuals[i]) > bound) {
-            weights[i] = 0.0;
-            ++flagged;
-            largest = std::max(largest, std::abs(fit->residuals[i]));
-          }
-        }
-        if (flagged == 0 || !moves_fit(largest, members.size(), *fit)) break;
-      }
-      // A point left out (one its neighbours did not predict, as a narrow dent's bottom seen through a coarse
-      // neighbourhood, or one an earlier, less refined fit missed) is given another chance when the last fit, made
-      // without it, passes within twice the bound (left out, a point that alone carries a feature is missed by
-      // more than it would be with it; gross errors are missed by far more). The face is refitted with those
-      // points, and any that the new fit still misses by more than the bound is left out again.
-      std::vector<std::size_t> second_chance;
-      double largest = 0.0;
-      for (std::size_t i = 0; fit->fitted() && i < members.size(); ++i) {
-        if (weights[i] == 0.0 && std::abs(fit->residuals[i]) <= kSecondChance * bound) {
-          weights[i] = 1.0;
-          second_chance.push_back(i);
+          if ((weights[i] > 0.0) == !outlier[i]) continue;
+          weights[i] = outlier[i] ? 0.0 : 1.0;
+          ++changed;
           largest = std::max(largest, std::abs(fit->residuals[i]));
         }
-      }
-      // Without a refit (the points could not move the fit measurably) their residuals stand as they are.
-      if (!second_chance.empty() && moves_fit(largest, members.size(), *fit)) {
-        const fitting::AdaptiveFitResult last = std::move(*fit);
-        refit(last.surface, last.params);
-      }
-      if (fit->fitted()) {
-        for (std::size_t i : second_chance) {
-          if (std::abs(fit->residuals[i]) > bound) weights[i] = 0.0;
-        }
+        if (changed == 0 || !moves_fit(largest, members.size(), *fit)) break;
       }
     }
     rep.fitted = fit && fit->fitted();
     ff.trusted.resize(members.size());
-    for (std::size_t i = 0; i < members.size(); ++i) ff.trusted[i] = weights[i] > 0.0;
+    // Trusted: what the last fit says (a point taken back or left out after it keeps the last fit's verdict).
+    for (std::size_t i = 0; i < members.size(); ++i) ff.trusted[i] = !outlier[i];
     if (rep.fitted) {
       rep.fit_status = fit->status;
       rep.stop_reason = fit_stop_reason(*fit, options.surface);
@@ -318,6 +270,8 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       rep.rms = fit->rms;
       rep.max_residual = fit->max_residual;
       rep.noise_sigma = fit->noise_sigma;
+      rep.effective_dof = fit->effective_dof;
+      rep.log10_smoothing = fit->log10_smoothing;
       rep.centre_surface = fit->surface;
       ff.params = fit->params;
     } else if (fit) {
@@ -357,6 +311,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
       c.status = PointStatus::Edge;
       c.normal = (raw[k] - edge).normalized();
       c.contact = raw[k] - r * c.normal;
+      c.uncertainty = registration.scale;
     }
   }
   for (const FaceFit& ff : fits.faces) {
@@ -375,6 +330,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
         c.status = ff.trusted[i] ? PointStatus::Ok : PointStatus::Outlier;
         c.contact = contacts[i].contact;
         c.normal = contacts[i].normal;
+        c.uncertainty = std::hypot(ff.fit->noise_sigma * std::sqrt(ff.fit->variance_factor[i]), ff.fit->misfit[i]);
       }
     } else {
       // Too few points (or a fit that could not be made): the registered nominal normal.
@@ -385,6 +341,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
         c.status = PointStatus::FewPoints;
         c.normal = R * (static_cast<double>(face.outward) * n.n);
         c.contact = raw[members[i]] - r * c.normal;
+        c.uncertainty = registration.scale;
       }
     }
   }
@@ -406,6 +363,26 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
       retry[k] = 1;
     }
   });
+  // The registration's share of u, in quadrature with the fit's: the registered model's position along the
+  // normal varies with the measurement noise as normal_variance says (most along weakly fixed motions). The noise
+  // is the fits' estimate (their median over the fitted faces), not the registration's residual scale, which
+  // holds the part's deformation too: that is what the deviations measure, not an uncertainty of where the
+  // model sits.
+  double noise = registration.scale;
+  {
+    std::vector<double> fitted_noise;
+    for (const FaceFit& ff : fits.faces) {
+      if (ff.report.fitted) fitted_noise.push_back(ff.fit->noise_sigma);
+    }
+    if (!fitted_noise.empty()) noise = geometry::median_in_place(fitted_noise);
+  }
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    CompensatedPoint& c = out[k];
+    if (!c.computed()) continue;
+    const double reg = noise * noise * registration::normal_variance(registration.constraints, to_cad * c.contact,
+                                                                    to_cad.linear() * c.normal);
+    c.uncertainty = std::sqrt(c.uncertainty * c.uncertainty + std::max(reg, 0.0));
+  }
   std::map<int, nurbs::ClosestPointSolver> solvers;  // built for the faces that need one
   for (std::size_t k = 0; k < raw.size(); ++k) {
     if (!retry[k]) continue;
@@ -418,6 +395,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
       out[k].deviation = signed_distance(face, x, foot);
     } else {
       out[k].status = PointStatus::Failed;
+      out[k].uncertainty = std::numeric_limits<double>::quiet_NaN();
     }
   }
   return out;
@@ -509,9 +487,17 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   out.seconds.compensation = clock.restart();
   for (FaceFit& ff : fits.faces) {
     FaceReport rep = std::move(ff.report);  // the fits are not needed past this point
+    double u_sum = 0.0;
+    int u_count = 0;
     for (std::size_t i = 0; i < ff.members.size(); ++i) {
-      rep.outliers += out.points[ff.members[i]].status == PointStatus::Outlier;
+      const CompensatedPoint& c = out.points[ff.members[i]];
+      rep.outliers += c.status == PointStatus::Outlier;
+      if (c.computed()) {
+        u_sum += c.uncertainty;
+        ++u_count;
+      }
     }
+    rep.mean_uncertainty = u_count > 0 ? u_sum / u_count : 0.0;
     out.faces.push_back(std::move(rep));
   }
   out.statistics = statistics(out.points);

@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "probecomp/nurbs/basis.hpp"
+#include "rational_basis.hpp"
 
 namespace probecomp::fitting {
 
@@ -18,35 +19,8 @@ using nurbs::kMaxDegree;
 using nurbs::Surface;
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
-// The (p+1)·(q+1) non-zero rational basis functions at (u, v) and the index of the first control point:
-// R[a·(q+1) + b] belongs to control point (su − p + a, sv − q + b).
-struct RationalBasis {
-  int i0 = 0, j0 = 0;
-  double R[(kMaxDegree + 1) * (kMaxDegree + 1)];
-};
-
-void rational_basis(const Surface& s, double u, double v, RationalBasis& out) {
-  const int p = s.p();
-  const int q = s.q();
-  const int su = s.U().find_span(u);
-  const int sv = s.V().find_span(v);
-  double Nu[kMaxDegree + 1];
-  double Nv[kMaxDegree + 1];
-  nurbs::basis_functions(s.U(), su, u, Nu);
-  nurbs::basis_functions(s.V(), sv, v, Nv);
-  out.i0 = su - p;
-  out.j0 = sv - q;
-  double W = 0.0;
-  for (int a = 0; a <= p; ++a) {
-    for (int b = 0; b <= q; ++b) {
-      const double r = Nu[a] * Nv[b] * s.weight(out.i0 + a, out.j0 + b);
-      out.R[a * (q + 1) + b] = r;
-      W += r;
-    }
-  }
-  const int n = (p + 1) * (q + 1);
-  for (int k = 0; k < n; ++k) out.R[k] /= W;
-}
+using detail::RationalBasis;
+using detail::rational_basis;
 
 // AᵀWA of the data in band form: entry (I, J) with I = (i, j), J = (i + di, j + dj), |di| ≤ p, |dj| ≤ q, at
 // band[I·B + (di + p)·(2q + 1) + (dj + q)], B = (2p + 1)(2q + 1). Every row of A has its (p+1)(q+1) non-zeros

@@ -41,9 +41,9 @@ std::string row_label(const PointTable& t, std::size_t k) {
 
 std::string compensated_csv(const PointTable& t, const compensation::CompensationResult& r) {
   const std::vector<int> carried = t.carried_columns();
-  const std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "face", "status"};
+  const std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "u", "face", "status"};
   std::ostringstream out;
-  out << "x,y,z,nx,ny,nz,deviation,face,status";
+  out << "x,y,z,nx,ny,nz,deviation,u,face,status";
   for (int c : carried) {
     const std::string& name = t.columns[static_cast<std::size_t>(c)];
     out << ',' << (std::find(ours.begin(), ours.end(), name) != ours.end() ? "input_" + name : name);
@@ -53,10 +53,11 @@ std::string compensated_csv(const PointTable& t, const compensation::Compensatio
     const compensation::CompensatedPoint& p = r.points[k];
     if (p.computed()) {
       out << mm(p.contact.x()) << ',' << mm(p.contact.y()) << ',' << mm(p.contact.z()) << ',' << unit(p.normal.x()) << ','
-          << unit(p.normal.y()) << ',' << unit(p.normal.z()) << ',' << mm(p.deviation) << ',' << p.face << ',';
+          << unit(p.normal.y()) << ',' << unit(p.normal.z()) << ',' << mm(p.deviation) << ',' << mm(p.uncertainty) << ','
+          << p.face << ',';
     } else {
       // Never dropped: the row is there, empty, with the reason.
-      out << ",,,,,,," << (p.face >= 0 ? std::to_string(p.face) : "") << ',';
+      out << ",,,,,,,," << (p.face >= 0 ? std::to_string(p.face) : "") << ',';
     }
     out << compensation::to_string(p.status);
     for (int c : carried) out << ',' << t.rows[k][static_cast<std::size_t>(c)];
@@ -69,13 +70,14 @@ std::string compensated_dmis(const PointTable& t, const compensation::Compensati
   std::ostringstream out;
   out << "$$ probecomp " << compensation::to_string(r.method) << " compensation of " << source
       << ": contact points and the normals used, machine frame, mm\n";
-  out << "$$ after each point: its deviation from the registered nominal (mm, + outside), face and status\n";
+  out << "$$ after each point: its deviation from the registered nominal (mm, + outside), its standard uncertainty u\n"
+      << "$$ along the normal (k = 1, mm), face and status\n";
   for (std::size_t k = 0; k < r.points.size(); ++k) {
     const compensation::CompensatedPoint& p = r.points[k];
     const std::string label = row_label(t, k);
     if (p.computed()) {
       out << dmis_point(label, p.contact, p.normal);
-      out << "$$ deviation=" << mm(p.deviation) << " face=" << p.face << " status=" << compensation::to_string(p.status) << '\n';
+      out << "$$ deviation=" << mm(p.deviation) << " u=" << mm(p.uncertainty) << " face=" << p.face << " status=" << compensation::to_string(p.status) << '\n';
     } else {
       out << "$$ FA(" << label << ") not compensated: status=" << compensation::to_string(p.status) << '\n';
     }
@@ -101,11 +103,13 @@ std::string statistics_json(const compensation::CompensationResult& r, const Fil
     const compensation::FaceReport& x = r.faces[f];
     j << (f ? ",\n   " : "\n   ") << "{\"face\": " << x.face << ", \"points\": " << x.points
       << ", \"fitted\": " << (x.fitted ? "true" : "false") << ", \"material_side\": \"" << cad::to_string(x.material)
-      << "\"";
+      << "\", \"mean_u\": " << fmt("%.9g", x.mean_uncertainty);
     if (x.fitted) {
       j << ", \"control_points\": " << x.control_points << ", \"fits\": " << x.fits
         << ", \"refinement_rounds\": " << x.rounds << ", \"rms_residual\": " << fmt("%.9g", x.rms)
         << ", \"max_residual\": " << fmt("%.9g", x.max_residual) << ", \"noise_estimate\": " << fmt("%.9g", x.noise_sigma)
+        << ", \"effective_dof\": " << fmt("%.6g", x.effective_dof)
+        << ", \"log10_smoothing\": " << fmt("%.4g", x.log10_smoothing)
         << ", \"outliers\": " << x.outliers
         << ", \"noise_reached\": " << (x.fit_status == fitting::AdaptiveFitResult::Status::OK ? "true" : "false");
     }

@@ -5,6 +5,13 @@
 
 namespace probecomp::registration {
 
+double normal_variance(const Constraints& c, const Point3& x, const Vector3& n) {
+  Eigen::Matrix<double, 6, 1> J;
+  J.head<3>() = (x - c.centre).cross(n) / c.length;
+  J.tail<3>() = n;
+  return J.dot(c.covariance * J);
+}
+
 Constraints analyse_constraints(const Eigen::Matrix<double, 6, 6>& H, const Point3& centre, double length) {
   return analyse_constraints(Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(H), centre, length);
 }
@@ -21,6 +28,9 @@ Constraints analyse_constraints(const Eigen::SelfAdjointEigenSolver<Eigen::Matri
   c.fixed = 6 - free;
   c.smallest_ratio = largest > 0.0 && free < 6 ? lambda(free) / largest : 0.0;
   c.free_basis = eig.eigenvectors().leftCols(free);
+  for (int k = free; k < 6; ++k) {
+    c.covariance += eig.eigenvectors().col(k) * eig.eigenvectors().col(k).transpose() / lambda(k);
+  }
   if (free == 0) return c;
 
   // A readable basis of the same subspace: the pure translations in it (combinations whose rotation part

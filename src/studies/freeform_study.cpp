@@ -9,6 +9,8 @@ FreeformStudyResult run_freeform_study(const FreeformStudyOptions& options) {
   FreeformStudyResult out;
   out.freeform = simulation::paper_freeform_case(options.reversed);
   if (options.noise_sigma >= 0.0) out.freeform.noise_sigma = options.noise_sigma;
+  // 1 mm deep over a width of 1.75 mm: slopes up to e^(-1/2) / 1.75 = 0.35, i.e. 19°.
+  if (options.steep_dent) out.freeform.deformation.bumps.at(1).width = 1.75;
   const simulation::FreeformCase& c = out.freeform;
   const cad::Face& face = c.nominal.faces.at(0);
   if (options.random_points > 0) {

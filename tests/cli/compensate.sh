@@ -18,7 +18,7 @@ awk -F, 'NR==1{print $0",id"; next} {print $0","NR-1}' "$W/demo/raw.csv" >"$W/ra
 "$P" compensate --cad "$W/demo/nominal.igs" --points "$W/raw_id.csv" --probe-radius 1 --output "$W/out.csv" \
   --json "$W/stats.json" --report "$W/report.html" --quiet || { echo "FAIL: compensate"; fail=1; }
 check "[ \$(wc -l <'$W/out.csv') -eq \$(wc -l <'$W/raw_id.csv') ]" "one output row per input row"
-check "head -1 '$W/out.csv' | grep -q '^x,y,z,nx,ny,nz,deviation,face,status,id$'" "output header"
+check "head -1 '$W/out.csv' | grep -q '^x,y,z,nx,ny,nz,deviation,u,face,status,id$'" "output header"
 check "tail -1 '$W/out.csv' | grep -q ',ok,7200$'" "last row carries its id"
 for key in '"transform"' '"registration": {"converged": true, "status": "converged", "stop_reason": "' \
            '"control_points"' '"noise_estimate"' '"counts"' '"deviation": {"points": 7200' \

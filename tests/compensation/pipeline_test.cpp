@@ -71,6 +71,35 @@ TEST(Pipeline, NoiseFreeDataAreCompensatedToASmallFractionOfAMicrometre) {
   EXPECT_LE(r.cad_summary.max_abs(), 1e-3);
 }
 
+// Issue 19's low-noise bars: the outlier test must never eat real shape. 3 000 random points at σ = 1.5 µm, and
+// the steep dent (19° flanks) without noise: no row flagged, largest error (flagged rows included) within 5 and
+// 2 µm (before the outlier test was decided against the fit: 46 µm with 68 rows flagged, 27 µm with 7).
+void expect_low_noise_bars(const studies::FreeformStudyOptions& o, double max_error) {
+  const studies::FreeformStudyResult r = studies::run_freeform_study(o);
+  EXPECT_EQ(r.cad.count(PointStatus::Ok), static_cast<int>(r.plan.size())) << "real shape flagged";
+  EXPECT_LE(r.cad_summary.max_abs(), max_error);
+  for (const auto& p : r.cad.points) {
+    ASSERT_TRUE(std::isfinite(p.uncertainty));
+    ASSERT_GE(p.uncertainty, 0.0);
+  }
+}
+
+TEST(Pipeline, ThreeThousandRandomPointsAtLowNoiseKeepEveryRow) {
+  studies::FreeformStudyOptions o;
+  o.random_points = 3000;
+  o.shuffle = true;
+  o.approach_normals = false;
+  o.noise_sigma = 0.0015;
+  expect_low_noise_bars(o, 0.005);
+}
+
+TEST(Pipeline, ASteepDentWithoutNoiseKeepsEveryRow) {
+  studies::FreeformStudyOptions o;
+  o.steep_dent = true;
+  o.noise_sigma = 0.0;
+  expect_low_noise_bars(o, 0.002);
+}
+
 // compensate() is the composition of the named steps: called one by one they give the same points, and the
 // statistics and face reports say what the points say.
 TEST(Pipeline, TheStepsComposeToCompensate) {

@@ -1,34 +1,36 @@
 #pragma once
-// Gross outliers among one face's points, found before the fit so that refinement cannot chase them. A point's
-// residual from the registered offset model (its deviation plus noise) is compared with a robust local quadratic
-// through its nearest neighbours' residuals: a deformation is smooth, so its neighbours predict it (to third
-// order in the point spacing), while a gross error is the point's alone. A point departing from its prediction
-// by more than `sigmas` robust scales (and `min_departure`) is an outlier.
+// Gross outliers among one face's points, decided against the face's fitted surface, never against a fixed-degree
+// local model: the fit follows real shape wherever several points show it (fitting/adaptive.hpp refines there, and
+// its span test caps each point's say), so what it cannot follow is the point's alone.
+//
+// A point is an outlier when its residual is beyond `sigmas` of its own standard deviation under noise alone:
+// σ̂·√(1 − h_k) for a point in the fit (h_k its leverage: a flexible fit absorbs part of a point's error, and the
+// test allows for it), σ̂·√(1 + v_k) for a point left out (its residual is then a prediction error: the noise plus
+// the fit's own uncertainty there). σ̂ is the fit's robust noise estimate; its floor, `min_residual`, keeps
+// exact data from collapsing the bound to the fit's own model error.
 
-#include <cstdint>
 #include <span>
 #include <vector>
 
-#include "probecomp/geometry/types.hpp"
+#include "probecomp/fitting/adaptive.hpp"
 
 namespace probecomp::compensation {
 
-struct LocalOutlierOptions {
-  int neighbours = 20;          // the quadratic's 6 coefficients from this many nearest points (k-d tree)
-  double sigmas = 8.0;          // departures beyond this many robust scales (1.4826 × their MAD) ...
-  double min_departure = 0.01;  // ... and beyond this (mm): far above a CMM's noise, far below a gross error
+struct OutlierTest {
+  // Five standard deviations: a Gaussian exceeds it once in 1.7 million points.
+  double sigmas = 5.0;
+  // mm. On noise-free data the fit's own model error (a few tenths of a micrometre where refinement stopped) must
+  // not read as outliers; 2 µm is below any gross error (a chip, a stuck probe: 0.1 mm and more) and above that
+  // model error.
+  double min_residual = 0.002;
 };
 
-struct LocalOutliers {
-  std::vector<char> outlier;  // per point
-  double scale = 0.0;         // robust scale of the departures, mm
-  int count = 0;
-  std::vector<std::uint32_t> nearest;  // each point's nearest other point (for fitting::fit_surface)
-};
+// Per point of `fit` (weights as given to it: zero for points left out), 1 where the point is an outlier.
+[[nodiscard]] std::vector<char> outliers_against_fit(const fitting::AdaptiveFitResult& fit,
+                                                     std::span<const double> weights, const OutlierTest& test = {});
 
-// `residuals`: each point's signed distance from the model; `normals`: the model's unit normal there (the local
-// chart is the plane across it). Parallel, deterministic. Fewer than neighbours + 1 points: none flagged.
-[[nodiscard]] LocalOutliers local_outliers(std::span<const Point3> points, std::span<const double> residuals,
-                                           std::span<const Vector3> normals, const LocalOutlierOptions& options = {});
+// The bound |residual| must exceed for point k to be an outlier, mm.
+[[nodiscard]] double outlier_bound(const fitting::AdaptiveFitResult& fit, double weight, std::size_t k,
+                                   const OutlierTest& test = {});
 
 }  // namespace probecomp::compensation

@@ -12,6 +12,7 @@
 // Every input point comes back, in order, with a status saying whether it can be trusted.
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -50,6 +51,12 @@ struct CompensatedPoint {
   Point3 contact = Point3::Zero();   // compensated contact point, machine frame
   Vector3 normal = Vector3::Zero();  // outward unit normal used for the offset
   double deviation = 0.0;            // signed distance from the registered nominal, + outside the material, mm
+  // Standard uncertainty (k = 1, mm) of the contact point along its normal: the fit's share σ̂·√(variance factor)
+  // (its hat-matrix diagonal and noise estimate) and the registration's share (registration::normal_variance times
+  // its residual variance) in quadrature. Where no fit stands behind the point (few points, an edge) the fit's
+  // share is the registration's residual scale: the raw centre's whole scatter about the model. NaN where nothing
+  // was computed.
+  double uncertainty = std::numeric_limits<double>::quiet_NaN();
   int face = -1;                     // index of the CAD face (cad::Face::index)
   [[nodiscard]] bool computed() const { return status != PointStatus::NotOnModel && status != PointStatus::Failed; }
 };
@@ -68,6 +75,9 @@ struct FaceReport {
   double rms = 0.0;         // of the last fit's residuals, mm
   double max_residual = 0.0;
   double noise_sigma = 0.0;
+  double effective_dof = 0.0;     // tr H of the fit: its effective number of parameters (per coordinate)
+  double log10_smoothing = 0.0;   // the fit's smoothing λ, log10, relative to the data's weight (penalized.hpp)
+  double mean_uncertainty = 0.0;  // mean u over the face's computed points, mm
   int outliers = 0;
   std::optional<nurbs::Surface> centre_surface;  // the fitted probe-centre surface, machine frame (when fitted)
 };
@@ -126,18 +136,13 @@ struct FitOptions {
   //  - no parameter correction: projecting the points on the fit lets those at the data's corners slide out
   //    into the ill-determined spans (largest error 0.36 mm with two corrections at σ = 10 µm, 0.017 mm
   //    without), and the registration's (u, v) serve as well elsewhere at half the fitting time.
-  fitting::AdaptiveFitOptions surface{.fit = {.smoothness = 1e-3, .max_iterations = 1}, .parameter_corrections = 0};
+  fitting::AdaptiveFitOptions surface{.parameter_corrections = 0};
   // A face is fitted when it holds at least this many points per control point of its offset surface; fewer
   // cannot average the noise out (its points fall back to the nominal normal).
   double min_points_per_control_point = 2.0;
-  // Gross outliers found before the fit, each against a quadratic through its neighbours (compensation/outliers.hpp).
-  LocalOutlierOptions gross_outliers;
-  // Residuals beyond this many noise sigmas (of the face's fit) mark outliers: left out of the refit. Five
-  // sigmas: a Gaussian exceeds it once in 1.7 million points.
-  double outlier_sigmas = 5.0;
-  // ... and beyond this (mm): on noise-free data the fit's own model error (a few tenths of a micrometre where
-  // refinement stopped) must not read as outliers. 2 µm is below any gross error and above that model error.
-  double min_outlier_residual = 0.002;
+  // Outliers, decided against the face's fit (compensation/outliers.hpp): flagged, left out of the refit, still
+  // compensated on the fit.
+  OutlierTest outliers;
 };
 
 // One face's points and its fit.

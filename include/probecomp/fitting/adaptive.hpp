@@ -1,19 +1,21 @@
 #pragma once
-// Least-squares surface fit refined where the data demand it (DESIGN.md §2 steps 4–5): fit the control points,
-// correct the points' parameters by projecting them on the fit, estimate the measurement noise robustly from
-// the residuals, and insert knots in the spans whose residuals the noise does not explain; repeat until every
-// span is consistent with the noise, the data can support no more control points, or the rounds run out.
+// Penalised surface fit refined where the data demand it (DESIGN.md §2 steps 4–5): fit the control points with
+// the smoothing chosen by GCV (fitting/penalized.hpp), optionally correct the points' parameters by projecting
+// them on the fit, estimate the measurement noise robustly from the residuals, and insert knots in the spans
+// whose residuals the noise does not explain; repeat until every span is consistent with the noise, the data
+// can support no more control points, or the rounds run out.
 
 #include <cstdint>
 #include <span>
 #include <vector>
 
 #include "probecomp/fitting/least_squares.hpp"
+#include "probecomp/fitting/penalized.hpp"
 
 namespace probecomp::fitting {
 
 struct AdaptiveFitOptions {
-  FitOptions fit;
+  PenalizedFitOptions fit;
   int max_rounds = 8;             // knot insertions at most
   int parameter_corrections = 2;  // projections of the points on the fit, each followed by a refit, per round
   // Residuals below this count as noise whatever the estimate (noise-free or almost noise-free data), mm. A
@@ -23,11 +25,25 @@ struct AdaptiveFitOptions {
   // exceeds in any span of the surface with this probability (split evenly over the spans, so that hundreds of
   // small spans do not raise false alarms by their number).
   double false_alarm = 0.01;
+  // Each point's share of its span's χ² is capped at clip² (a Huber-like bound): a lone gross error can then
+  // not make a span look unexplained by itself, so refinement follows shape that several points show, never
+  // one point.
+  double clip = 4.0;
+  // An unexplained span's penalty weight is divided by 10 each round, down to this: a million times weaker than
+  // the rest of the face still holds a span that no point fixes.
+  double min_span_weight = 1e-6;
+  // The spatially adaptive penalty's exponent (see fit_surface). Measured on the free-form case with a 19° dent,
+  // σ = 4.5 µm: largest error 13.1 µm at 0.5, 9.6–10.9 µm at 1, 9.8 µm at 2 with the flat panel's largest error
+  // lowest at 2 (7.9 µm against 9.2–9.9 µm).
+  double roughness_power = 2.0;
   // A span with fewer points is not split (its quarters would hold one or none). Four: a narrow dent in a grid of
   // points about a third of its width apart needs spans that hold only a few (measured on the free-form case: a
   // dent of σ = 1.5 mm, 0.84 mm grid: largest error 21 µm with 8, 7.9 µm with 4).
   int min_points_to_split = 4;
-  double min_points_per_control_point = 4.0;  // refinement stops before the fit has fewer
+  // Two: the penalty (chosen by cross-validation) holds the variance of a fit with more control points than the
+  // noise can average on its own (3 000 random points, σ = 1.5 µm: largest error 46 µm with 68 points flagged
+  // at 4, 3.2 µm and none flagged at 2).
+  double min_points_per_control_point = 2.0;  // refinement stops before the fit has fewer
   // ... unless the noise estimate is at the floor (noise-free data): then there is no noise to average and the
   // fit may go as far as this, to follow a narrow feature (the free-form case without noise: largest error
   // 1.9 µm when stopped at 4, 0.18 µm at 2).
@@ -52,6 +68,13 @@ struct AdaptiveFitResult {
   double max_residual = 0.0; // largest |residual| over points with weight > 0, mm
   double noise_sigma = 0.0;  // robust estimate of the measurement noise, mm
   int spans_above_noise = 0;
+  double effective_dof = 0.0;    // tr H of the last fit (per coordinate)
+  double log10_smoothing = 0.0;  // its smoothing, relative (PenalizedFitResult)
+  // Per point: the fitted point's variance over σ² (PenalizedFitResult::variance_factor); w_k times it is the
+  // point's leverage h_k.
+  std::vector<double> variance_factor{};
+  // Per point: the estimated bias of the fit in the point's neighbourhood of spans, mm (see fit_surface).
+  std::vector<double> misfit{};
 
   [[nodiscard]] bool ok() const { return status == Status::OK; }
   // A surface was fitted (OK or NoiseNotReached): `surface`, `params` and `residuals` describe it.

@@ -35,9 +35,17 @@ struct Constraints {
   Eigen::Matrix<double, 6, Eigen::Dynamic> free_basis;
   Point3 centre = Point3::Zero();
   double length = 1.0;
+  // H⁺ over the fixed motions (Σ e_k e_kᵀ / λ_k over H's eigenpairs above the free ones): the covariance of the
+  // estimated scaled twist per unit residual variance (Gauss–Newton; the free motions, held, contribute none).
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
 
   [[nodiscard]] bool complete() const { return fixed == 6; }
 };
+
+// The variance, per unit residual variance, of the registered model's position along the unit normal n at x (both
+// in the frame H was built in, the CAD frame for register_points): J·covariance·Jᵀ with J = ((x − c) × n / L, n).
+// Times the registration's residual variance, the registration's share of a deviation's variance there.
+[[nodiscard]] double normal_variance(const Constraints& c, const Point3& x, const Vector3& n);
 
 // H in the scaled twist coordinates about `centre` (RMS radius `length`); see above.
 [[nodiscard]] Constraints analyse_constraints(const Eigen::Matrix<double, 6, 6>& H, const Point3& centre, double length);

@@ -17,6 +17,7 @@ struct FreeformStudyOptions {
   bool reversed = false;        // the CAD surface's S_u × S_v points into the material
   std::uint64_t seed = 1;       // noise, random points and shuffling
   double noise_sigma = -1.0;    // >= 0: replaces the case's σ (mm)
+  bool steep_dent = false;      // the dent narrowed to a Gaussian width of 1.75 mm: flanks sloping up to 19°
   compensation::CompensateOptions compensate;  // method and probe radius are set by the study
 };
 

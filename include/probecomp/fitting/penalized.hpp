@@ -1,0 +1,84 @@
+#pragma once
+// Penalised least-squares fit of a NURBS surface's control points, the smoothing chosen from the data
+// (DESIGN.md §2 step 4, and issue 19). Degrees, knots and weights are those of `start`; the unknown is the
+// displacement D = P − P⁰ of the control net from the start surface's, so that the fit is
+//   S(u,v) = S⁰(u,v) + Σ R_I(u,v) D_I          (R: the rational basis of the start surface)
+// and D minimises
+//   Σ_k w_k |S(u_k,v_k) − x_k|²  +  λ · E(D)  +  ε |D|²
+// where E is the thin-plate energy of the displacement field on the parameter domain, scaled to millimetres
+// (∫∫ d_ss² + 2 d_st² + d_tt² ds dt with s = L_u·u, t = L_v·v, L the mean speed |S_u|, |S_v| of the start),
+// over the whole domain: boundary spans included, each span's share weighted by `span_weights` (a spatially
+// varying penalty: small where the part departs sharply from nominal, large where it does not). E does not
+// penalise a displacement that is linear on the domain, so a broad tilt or bulge costs little; ε (a whisker)
+// only makes the system definite where no point and no curvature fixes a control point.
+//
+// λ minimises the leave-one-out cross-validation score (Allen's PRESS; Wahba, "Spline Models for Observational
+// Data", 1990, ch. 4) CV(λ) = Σ w_k |r_k|² / (1 − h_k)², h_k the diagonal of the hat matrix H mapping the data to
+// the fitted values: the λ whose fit predicts left-out points best, needing no noise estimate. (Not the
+// generalised form, which replaces each h_k by their mean: on scattered points and a fine basis it cannot see a
+// point that alone holds a control point, and picks a fit that swings between points of exact data.) tr H (the
+// fit's effective degrees of freedom) and each point's hat diagonal come from the entries of (AᵀWA + λG)⁻¹ inside its
+// band, by the Takahashi recurrence on the band Cholesky factor (Takahashi, Fagan and Chin 1973; the "selected
+// inversion" of sparse solvers), in O(K·b²) for K control points and bandwidth b, like the factorisation.
+
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "probecomp/fitting/least_squares.hpp"
+#include "probecomp/nurbs/surface.hpp"
+
+namespace probecomp::fitting {
+
+struct PenalizedFitOptions {
+  // A fixed smoothing (log10 of λ relative to trace(AᵀWA) / trace(G)); empty: chosen by GCV in the range below.
+  std::optional<double> log10_smoothing;
+  // The search: a scan in steps of `scan_step` decades over [min, max], then a golden-section search between the
+  // best step's two neighbours. The score is smooth and has one minimum in practice, so the scan only brackets it. Relative λ of 1e-9 lets the fit follow noise-free data to a few hundredths of a micrometre;
+  // 1e3 is far beyond where the energy dominates any data set (the fit is then S⁰ plus a linear displacement).
+  double min_log10_smoothing = -9.0;
+  double max_log10_smoothing = 3.0;
+  double scan_step = 1.5;
+  int golden_steps = 6;
+  // ε relative to the mean diagonal of AᵀWA: far below any data's weight on a control point.
+  double ridge = 1e-9;
+};
+
+struct PenalizedFitResult {
+  enum class Status {
+    OK,              // fitted
+    NotDone,         // bad input: counts differ, no points, a parameter or point not finite, a negative weight
+    NumericalError,  // the factorisation failed or produced non-finite control points
+  };
+  Status status = Status::NotDone;
+  nurbs::Surface surface;           // the fit (the start surface unless OK)
+  double log10_smoothing = 0.0;     // the λ used, relative (see the options)
+  double lambda = 0.0;              // the λ used, absolute
+  double effective_dof = 0.0;       // tr H: the fit's effective number of parameters per coordinate
+  double gcv = 0.0;                 // its cross-validation score (mean squared prediction error), mm²
+  double rss = 0.0;                 // Σ w_k |S(u_k,v_k) − x_k|², mm²
+  double weight_sum = 0.0;          // Σ w_k
+  int points_used = 0;              // points with w_k > 0
+  int evaluations = 0;              // factorisations made in the search
+  // Per point: a_kᵀ (AᵀWA + λG + εI)⁻¹ a_k, a_k its row of the basis. The fitted point's variance is σ² times
+  // this (Wahba's Bayesian posterior variance, which also covers the smoothing bias on average: Nychka 1988);
+  // w_k times this is the point's hat diagonal (its leverage). Defined for left-out points too.
+  std::vector<double> variance_factor{};
+  // Per knot span (a·(V spans) + b): the thin-plate energy of the fitted displacement over the span divided by
+  // the span's area (mm⁻²·mm² per mm²: its mean squared curvature), the roughness a spatially adaptive penalty
+  // follows.
+  std::vector<double> span_roughness{};
+
+  [[nodiscard]] bool ok() const { return status == Status::OK; }
+};
+
+// `weights` empty means all 1; a zero weight leaves a point out of the fit (it still gets its variance factor).
+// `span_weights`: the penalty's weight per knot span, span (a, b) at a·(V spans) + b; empty means all 1.
+// Parallel (oneTBB) and deterministic.
+[[nodiscard]] PenalizedFitResult fit_penalized(const nurbs::Surface& start, std::span<const Point3> points,
+                                               std::span<const SurfaceParameter> params,
+                                               std::span<const double> weights = {},
+                                               const PenalizedFitOptions& options = {},
+                                               std::span<const double> span_weights = {});
+
+}  // namespace probecomp::fitting

@@ -1,0 +1,509 @@
+#include "probecomp/fitting/penalized.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "rational_basis.hpp"
+
+namespace probecomp::fitting {
+
+namespace {
+
+using detail::RationalBasis;
+using detail::RationalBasisD2;
+using nurbs::Surface;
+
+// Control point (i, j) → unknown I, the shorter direction inner so that the band is narrow: every pair of control
+// points under one basis row (|Δi| ≤ p, |Δj| ≤ q) is then within b = p·nv + q (or q·nu + p) of each other.
+struct Ordering {
+  int nu = 0, nv = 0;
+  bool v_inner = true;
+  Ordering(int nu_, int nv_) : nu(nu_), nv(nv_), v_inner(nv_ <= nu_) {}
+  [[nodiscard]] int index(int i, int j) const { return v_inner ? i * nv + j : j * nu + i; }
+  [[nodiscard]] int bandwidth(int p, int q) const { return v_inner ? p * nv + q : q * nu + p; }
+};
+
+// A symmetric band matrix of order n and half-bandwidth b, its lower half by rows: (I, J), I − b ≤ J ≤ I, at
+// a[I·(b+1) + J − I + b]. Rows are contiguous, so the factorisation's inner products run over contiguous memory.
+struct Band {
+  int n = 0, b = 0;
+  std::vector<double> a;
+  Band() = default;
+  Band(int n_, int b_) : n(n_), b(b_), a(static_cast<std::size_t>(n_) * static_cast<std::size_t>(b_ + 1), 0.0) {}
+  [[nodiscard]] double& at(int I, int J) { return a[static_cast<std::size_t>(I) * (b + 1) + (J - I + b)]; }
+  [[nodiscard]] double at(int I, int J) const { return a[static_cast<std::size_t>(I) * (b + 1) + (J - I + b)]; }
+  // += scale · v vᵀ over the unknowns idx[0..m).
+  void add_outer(const int* idx, const double* v, int m, double scale) {
+    for (int x = 0; x < m; ++x) {
+      const double sx = scale * v[x];
+      if (sx == 0.0) continue;
+      for (int y = 0; y < m; ++y) {
+        if (idx[y] <= idx[x]) at(idx[x], idx[y]) += sx * v[y];
+      }
+    }
+  }
+  void add(const Band& o, double scale = 1.0) {
+    for (std::size_t k = 0; k < a.size(); ++k) a[k] += scale * o.a[k];
+  }
+  [[nodiscard]] double trace() const {
+    double t = 0.0;
+    for (int I = 0; I < n; ++I) t += at(I, I);
+    return t;
+  }
+};
+
+// In-place Cholesky factor L (N = L·Lᵀ) of a band matrix, row by row (the band keeps no fill outside it).
+bool cholesky(Band& L) {
+  const int b = L.b;
+  for (int I = 0; I < L.n; ++I) {
+    const int m0 = std::max(0, I - b);
+    const double* rowI = &L.a[static_cast<std::size_t>(I) * (b + 1) + (m0 - I + b)];
+    for (int J = m0; J <= I; ++J) {
+      const double* rowJ = &L.a[static_cast<std::size_t>(J) * (b + 1) + (m0 - J + b)];
+      double s = L.at(I, J);
+      for (int m = 0; m < J - m0; ++m) s -= rowI[m] * rowJ[m];
+      if (J == I) {
+        if (!(s > 0.0) || !std::isfinite(s)) return false;
+        L.at(I, I) = std::sqrt(s);
+      } else {
+        L.at(I, J) = s / L.at(J, J);
+      }
+    }
+  }
+  return true;
+}
+
+// x = (L·Lᵀ)⁻¹ r for the three columns of r (n × 3, row major), in place.
+void solve(const Band& L, std::vector<double>& r) {
+  const int n = L.n, b = L.b;
+  for (int I = 0; I < n; ++I) {
+    for (int c = 0; c < 3; ++c) {
+      double s = r[3 * I + c];
+      for (int m = std::max(0, I - b); m < I; ++m) s -= L.at(I, m) * r[3 * m + c];
+      r[3 * I + c] = s / L.at(I, I);
+    }
+  }
+  for (int I = n - 1; I >= 0; --I) {
+    for (int c = 0; c < 3; ++c) {
+      double s = r[3 * I + c];
+      for (int k = I + 1; k <= std::min(n - 1, I + b); ++k) s -= L.at(k, I) * r[3 * k + c];
+      r[3 * I + c] = s / L.at(I, I);
+    }
+  }
+}
+
+// The entries of Z = (L·Lᵀ)⁻¹ inside the band (Takahashi, Fagan and Chin 1973): from Lᵀ·Z = L⁻¹, whose upper
+// triangle is diag(1/L_ii), Z_ij = (δ_ij / L_ii − Σ_{k>i} L_ki Z_kj) / L_ii for j ≥ i, from the last row up.
+// Every Z_kj the sum needs has i < k, j ≤ i + b, inside the band already computed. Upper half by rows:
+// Z(i, j), i ≤ j ≤ i + b, at z[i·(b+1) + j − i].
+std::vector<double> band_inverse(const Band& L) {
+  const int n = L.n, b = L.b;
+  std::vector<double> z(static_cast<std::size_t>(n) * (b + 1), 0.0);
+  auto Z = [&](int i, int j) -> double& {
+    if (j < i) std::swap(i, j);
+    return z[static_cast<std::size_t>(i) * (b + 1) + (j - i)];
+  };
+  std::vector<double> column(static_cast<std::size_t>(b + 1));
+  for (int i = n - 1; i >= 0; --i) {
+    const int last = std::min(n - 1, i + b);
+    for (int k = i + 1; k <= last; ++k) column[static_cast<std::size_t>(k - i)] = L.at(k, i);
+    const double d = L.at(i, i);
+    for (int j = last; j >= i; --j) {
+      double s = j == i ? 1.0 / d : 0.0;
+      for (int k = i + 1; k <= last; ++k) s -= column[static_cast<std::size_t>(k - i)] * Z(k, j);
+      Z(i, j) = s / d;
+    }
+  }
+  return z;
+}
+
+bool inside(const nurbs::Domain& d, const SurfaceParameter& t) {
+  return t.u >= d.u0 && t.u <= d.u1 && t.v >= d.v0 && t.v <= d.v1;
+}
+
+// Gauss–Legendre on [−1, 1], five nodes: exact for the polynomial (non-rational) energy up to degree 5 surfaces.
+constexpr std::array<double, 5> kGaussNodes = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
+                                               0.9061798459386640};
+constexpr std::array<double, 5> kGaussWeights = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
+                                                 0.4786286704993665, 0.2369268850561891};
+
+// Points per assembly chunk: chunks are fixed by the number of points alone and summed in order, so the sums (and
+// the fit) do not depend on the thread count.
+constexpr std::size_t kChunkPoints = 16384;
+constexpr std::size_t kChunkMemoryBytes = std::size_t{64} << 20;
+
+// The data's normal equations for the displacement: AᵀWA, AᵀWy and yᵀWy with y_k = x_k − S⁰(u_k, v_k).
+struct DataTerms {
+  Band AtWA;
+  std::vector<double> AtWy;  // n × 3
+  double yWy = 0.0;
+  double weight_sum = 0.0;
+  int used = 0;
+};
+
+DataTerms assemble_data(const Surface& s, const Ordering& order, int b, std::span<const Point3> points,
+                        std::span<const SurfaceParameter> params, std::span<const double> weights) {
+  const int n = s.num_u() * s.num_v();
+  const int p = s.p(), q = s.q();
+  const std::size_t n_points = points.size();
+  const std::size_t bytes = static_cast<std::size_t>(n) * (b + 4) * sizeof(double);
+  const std::size_t max_chunks = std::max<std::size_t>(1, kChunkMemoryBytes / std::max<std::size_t>(bytes, 1));
+  const std::size_t chunks = std::clamp<std::size_t>((n_points + kChunkPoints - 1) / kChunkPoints, 1, max_chunks);
+  std::vector<DataTerms> parts(chunks);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    DataTerms& t = parts[c];
+    t.AtWA = Band(n, b);
+    t.AtWy.assign(static_cast<std::size_t>(n) * 3, 0.0);
+    RationalBasis rb;
+    int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
+    const int m = (p + 1) * (q + 1);
+    for (std::size_t k = n_points * c / chunks; k < n_points * (c + 1) / chunks; ++k) {
+      const double w = weights.empty() ? 1.0 : weights[k];
+      if (w == 0.0) continue;
+      detail::rational_basis(s, params[k].u, params[k].v, rb);
+      Vector3 S0 = Vector3::Zero();
+      for (int a = 0; a < m; ++a) {
+        const int i = rb.i0 + a / (q + 1), j = rb.j0 + a % (q + 1);
+        idx[a] = order.index(i, j);
+        S0 += rb.R[a] * s.control_point(i, j);
+      }
+      const Vector3 y = points[k] - S0;
+      t.AtWA.add_outer(idx, rb.R, m, w);
+      for (int a = 0; a < m; ++a) {
+        for (int c3 = 0; c3 < 3; ++c3) t.AtWy[3 * static_cast<std::size_t>(idx[a]) + c3] += w * rb.R[a] * y[c3];
+      }
+      t.yWy += w * y.squaredNorm();
+      t.weight_sum += w;
+      ++t.used;
+    }
+  });
+  DataTerms& out = parts[0];
+  for (std::size_t c = 1; c < chunks; ++c) {
+    out.AtWA.add(parts[c].AtWA);
+    for (std::size_t k = 0; k < out.AtWy.size(); ++k) out.AtWy[k] += parts[c].AtWy[k];
+    out.yWy += parts[c].yWy;
+    out.weight_sum += parts[c].weight_sum;
+    out.used += parts[c].used;
+  }
+  return std::move(out);
+}
+
+// The thin-plate energy's matrix G: Σ_spans φ_s ∫∫_span (R_ss R_ssᵀ + 2 R_st R_stᵀ + R_tt R_ttᵀ) ds dt, s = L_u·u,
+// t = L_v·v, by 5 × 5 Gauss points per span. Chunks of u spans in a fixed number, summed in order.
+// With `D` (n × 3, the displacement of the control net) it also writes each span's roughness of that
+// displacement (its energy over the span's area) to `roughness` and builds no matrix.
+Band thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span<const double> span_weights,
+                       const std::vector<double>* D = nullptr, std::vector<double>* roughness = nullptr) {
+  const int n = s.num_u() * s.num_v();
+  const int p = s.p(), q = s.q();
+  const std::vector<double> bu = s.U().breakpoints();
+  const std::vector<double> bv = s.V().breakpoints();
+  const int nsu = static_cast<int>(bu.size()) - 1, nsv = static_cast<int>(bv.size()) - 1;
+  // The mean speeds: millimetres per unit of u and of v.
+  double Lu = 0.0, Lv = 0.0;
+  {
+    const nurbs::Domain d = s.domain();
+    constexpr int kSamples = 9;
+    for (int a = 0; a < kSamples; ++a) {
+      for (int c = 0; c < kSamples; ++c) {
+        const nurbs::SurfaceD1 e = nurbs::derivatives_d1(s, d.u0 + (d.u1 - d.u0) * (a + 0.5) / kSamples,
+                                                         d.v0 + (d.v1 - d.v0) * (c + 0.5) / kSamples);
+        Lu += e.Su.norm();
+        Lv += e.Sv.norm();
+      }
+    }
+    Lu = std::max(Lu / (kSamples * kSamples), 1e-12);
+    Lv = std::max(Lv / (kSamples * kSamples), 1e-12);
+  }
+  // ds dt = Lu Lv du dv; d_ss = d_uu / Lu², d_st = d_uv / (Lu Lv), d_tt = d_vv / Lv².
+  const double cuu = Lu * Lv / std::pow(Lu, 4), cuv = 2.0 * Lu * Lv / (Lu * Lu * Lv * Lv), cvv = Lu * Lv / std::pow(Lv, 4);
+  const int chunks = std::min(nsu, 8);
+  std::vector<Band> parts(static_cast<std::size_t>(chunks));
+  if (roughness) roughness->assign(static_cast<std::size_t>(nsu) * nsv, 0.0);
+  tbb::parallel_for(0, chunks, [&](int c) {
+    Band& G = parts[static_cast<std::size_t>(c)];
+    if (!D) G = Band(n, b);
+    RationalBasisD2 d2;
+    int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
+    const int m = (p + 1) * (q + 1);
+    for (int a = nsu * c / chunks; a < nsu * (c + 1) / chunks; ++a) {
+      const double ua = bu[static_cast<std::size_t>(a)], ub = bu[static_cast<std::size_t>(a) + 1];
+      const int su = s.U().find_span(0.5 * (ua + ub));
+      for (int e = 0; e < nsv; ++e) {
+        const double phi = D ? 1.0 : span_weights.empty() ? 1.0 : span_weights[static_cast<std::size_t>(a) * nsv + e];
+        if (phi == 0.0) continue;
+        double energy = 0.0;
+        const double va = bv[static_cast<std::size_t>(e)], vb = bv[static_cast<std::size_t>(e) + 1];
+        const int sv = s.V().find_span(0.5 * (va + vb));
+        const double jac = 0.25 * (ub - ua) * (vb - va) * phi;
+        for (std::size_t gu = 0; gu < kGaussNodes.size(); ++gu) {
+          const double u = 0.5 * (ua + ub) + 0.5 * (ub - ua) * kGaussNodes[gu];
+          for (std::size_t gv = 0; gv < kGaussNodes.size(); ++gv) {
+            const double v = 0.5 * (va + vb) + 0.5 * (vb - va) * kGaussNodes[gv];
+            detail::rational_basis_d2(s, su, sv, u, v, d2);
+            for (int k = 0; k < m; ++k) idx[k] = order.index(d2.i0 + k / (q + 1), d2.j0 + k % (q + 1));
+            const double w = jac * kGaussWeights[gu] * kGaussWeights[gv];
+            if (D) {
+              Vector3 duu = Vector3::Zero(), duv = Vector3::Zero(), dvv = Vector3::Zero();
+              for (int k = 0; k < m; ++k) {
+                const Vector3 d((*D)[3 * idx[k]], (*D)[3 * idx[k] + 1], (*D)[3 * idx[k] + 2]);
+                duu += d2.Ruu[k] * d;
+                duv += d2.Ruv[k] * d;
+                dvv += d2.Rvv[k] * d;
+              }
+              energy += w * (cuu * duu.squaredNorm() + cuv * duv.squaredNorm() + cvv * dvv.squaredNorm());
+              continue;
+            }
+            G.add_outer(idx, d2.Ruu, m, w * cuu);
+            G.add_outer(idx, d2.Ruv, m, w * cuv);
+            G.add_outer(idx, d2.Rvv, m, w * cvv);
+          }
+        }
+        // The span's area in mm²: its parameter area times Lu·Lv (jac holds a quarter of the parameter area).
+        if (D) (*roughness)[static_cast<std::size_t>(a) * nsv + e] = energy / (4.0 * jac * Lu * Lv);
+      }
+    }
+  });
+  if (D) return {};
+  for (int c = 1; c < chunks; ++c) parts[0].add(parts[static_cast<std::size_t>(c)]);
+  return std::move(parts[0]);
+}
+
+// One trial λ: the factor, the displacement, the residual sum of squares and tr H.
+struct Trial {
+  bool ok = false;
+  double log10_smoothing = 0.0, lambda = 0.0;
+  double rss = 0.0, trace = 0.0, gcv = std::numeric_limits<double>::infinity();
+  Band L;
+  std::vector<double> D;  // n × 3
+};
+
+// Each point's leverage-free basis row and data, for the leave-one-out score.
+struct PointRows {
+  const Surface& s;
+  const Ordering& order;
+  std::span<const Point3> points;
+  std::span<const SurfaceParameter> params;
+  std::span<const double> weights;
+};
+
+// Points the cross-validation score is summed over at most.
+constexpr std::size_t kCvPoints = 16384;
+
+// Leave-one-out cross-validation (Allen's PRESS): Σ w_k |r_k|² / (1 − h_k)², r_k the point's residual and h_k its
+// leverage. Unlike GCV, which replaces each h_k by their mean, it sees a point that alone holds a control point
+// (h_k near 1): with scattered points on a fine basis that is where an almost unpenalised fit swings between
+// the points, and GCV, blind to it, would choose such a fit for exact data.
+double leave_one_out(const PointRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b) {
+  const Surface& s = rows.s;
+  const int p = s.p(), q = s.q();
+  const std::size_t n_points = rows.points.size();
+  constexpr std::size_t kBlock = 4096;  // fixed blocks summed in order: the same sum for any thread count
+  const std::size_t blocks = (n_points + kBlock - 1) / kBlock;
+  // Above kCvPoints points, every stride-th point (in input order, so the same points for every λ): each term is
+  // exact for its point, so the sum over the sample estimates the whole sum without bias, at a bounded cost.
+  const std::size_t stride = std::max<std::size_t>(1, n_points / kCvPoints);
+  std::vector<double> part(blocks, 0.0);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) {
+    RationalBasis rb;
+    int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
+    const int m = (p + 1) * (q + 1);
+    double sum = 0.0;
+    for (std::size_t k = blk * kBlock; k < std::min(n_points, (blk + 1) * kBlock); ++k) {
+      const double w = rows.weights.empty() ? 1.0 : rows.weights[k];
+      if (w == 0.0 || k % stride != 0) continue;
+      detail::rational_basis(s, rows.params[k].u, rows.params[k].v, rb);
+      Vector3 fitted = Vector3::Zero();
+      for (int a = 0; a < m; ++a) {
+        const int i = rb.i0 + a / (q + 1), j = rb.j0 + a % (q + 1);
+        idx[a] = rows.order.index(i, j);
+        const std::size_t I = static_cast<std::size_t>(idx[a]);
+        fitted += rb.R[a] * (s.control_point(i, j) + Vector3(D[3 * I], D[3 * I + 1], D[3 * I + 2]));
+      }
+      double v = 0.0;
+      for (int a = 0; a < m; ++a) {
+        for (int c = 0; c < m; ++c) {
+          const int I = std::min(idx[a], idx[c]), J = std::max(idx[a], idx[c]);
+          v += rb.R[a] * rb.R[c] * Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
+        }
+      }
+      const double one_minus_h = std::max(1.0 - w * v, 1e-6);
+      sum += w * (fitted - rows.points[k]).squaredNorm() / (one_minus_h * one_minus_h);
+    }
+    part[blk] = sum;
+  });
+  double total = 0.0;
+  for (double x : part) total += x;
+  return total;
+}
+
+Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double ridge, double log10_smoothing,
+               bool keep_factor, const PointRows& rows) {
+  Trial t;
+  t.log10_smoothing = log10_smoothing;
+  t.lambda = std::pow(10.0, log10_smoothing) * scale_ratio;
+  Band N = data.AtWA;
+  N.add(G, t.lambda);
+  for (int I = 0; I < N.n; ++I) N.at(I, I) += ridge;
+  if (!cholesky(N)) return t;
+  t.D = data.AtWy;
+  solve(N, t.D);
+  // RSS = yᵀWy − 2 Dᵀ AᵀWy + Dᵀ AᵀWA D, per coordinate (y is the small displacement from the start, so the
+  // difference loses nothing that matters).
+  double quad = 0.0, cross = 0.0;
+  const int n = N.n, b = N.b;
+  for (int I = 0; I < n; ++I) {
+    for (int c = 0; c < 3; ++c) cross += t.D[3 * I + c] * data.AtWy[3 * I + c];
+    for (int J = std::max(0, I - b); J <= I; ++J) {
+      const double a = data.AtWA.at(I, J);
+      if (a == 0.0) continue;
+      double dot = 0.0;
+      for (int c = 0; c < 3; ++c) dot += t.D[3 * I + c] * t.D[3 * J + c];
+      quad += (J == I ? 1.0 : 2.0) * a * dot;
+    }
+  }
+  t.rss = std::max(data.yWy - 2.0 * cross + quad, 0.0);
+  const std::vector<double> Z = band_inverse(N);
+  double trace = 0.0;
+  for (int I = 0; I < n; ++I) {
+    for (int J = std::max(0, I - b); J <= I; ++J) {
+      const double a = data.AtWA.at(I, J);
+      if (a == 0.0) continue;
+      trace += (J == I ? 1.0 : 2.0) * a * Z[static_cast<std::size_t>(J) * (b + 1) + (I - J)];
+    }
+  }
+  t.trace = trace;
+  const double m = static_cast<double>(data.used);
+  (void)m;
+  t.gcv = leave_one_out(rows, t.D, Z, b) / data.weight_sum;
+  t.ok = std::isfinite(t.rss) && std::isfinite(trace);
+  if (keep_factor) t.L = std::move(N);
+  return t;
+}
+
+}  // namespace
+
+PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> points,
+                                 std::span<const SurfaceParameter> params, std::span<const double> weights,
+                                 const PenalizedFitOptions& options, std::span<const double> span_weights) {
+  PenalizedFitResult result{.status = PenalizedFitResult::Status::NotDone, .surface = start};
+  const std::size_t n_points = points.size();
+  if (n_points == 0 || params.size() != n_points || (!weights.empty() && weights.size() != n_points)) return result;
+  const nurbs::Domain dom = start.domain();
+  for (std::size_t k = 0; k < n_points; ++k) {
+    const double w = weights.empty() ? 1.0 : weights[k];
+    if (!points[k].allFinite() || !inside(dom, params[k]) || !(w >= 0.0) || !std::isfinite(w)) return result;
+  }
+  const int nu = start.num_u(), nv = start.num_v();
+  const int n = nu * nv;
+  const Ordering order(nu, nv);
+  const int b = std::min(order.bandwidth(start.p(), start.q()), n - 1);
+
+  const DataTerms data = assemble_data(start, order, b, points, params, weights);
+  if (data.used == 0 || !(data.weight_sum > 0.0)) return result;
+  const Band G = thin_plate_energy(start, order, b, span_weights);
+  const double data_trace = data.AtWA.trace();
+  const double scale_ratio = data_trace / std::max(G.trace(), 1e-300);
+  const double ridge = options.ridge * data_trace / n;
+
+  const PointRows rows{start, order, points, params, weights};
+  auto run = [&](double t10, bool keep) {
+    ++result.evaluations;
+    return evaluate(data, G, scale_ratio, ridge, t10, keep, rows);
+  };
+  double best_t = 0.0;
+  if (options.log10_smoothing) {
+    best_t = *options.log10_smoothing;
+  } else {
+    // A scan in decades, then golden sections of the best decade's two neighbours.
+    double best_gcv = std::numeric_limits<double>::infinity();
+    best_t = options.max_log10_smoothing;
+    for (double t10 = options.min_log10_smoothing; t10 <= options.max_log10_smoothing + 1e-9; t10 += options.scan_step) {
+      const Trial t = run(t10, false);
+      if (t.ok && t.gcv < best_gcv) {
+        best_gcv = t.gcv;
+        best_t = t10;
+      }
+    }
+    constexpr double kGolden = 0.6180339887498949;
+    double lo = std::max(best_t - options.scan_step, options.min_log10_smoothing);
+    double hi = std::min(best_t + options.scan_step, options.max_log10_smoothing);
+    double x1 = hi - kGolden * (hi - lo), x2 = lo + kGolden * (hi - lo);
+    double f1 = run(x1, false).gcv, f2 = run(x2, false).gcv;
+    for (int step = 0; step < options.golden_steps; ++step) {
+      if (f1 <= f2) {
+        hi = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = hi - kGolden * (hi - lo);
+        f1 = run(x1, false).gcv;
+      } else {
+        lo = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = lo + kGolden * (hi - lo);
+        f2 = run(x2, false).gcv;
+      }
+    }
+    const double golden_t = f1 <= f2 ? x1 : x2;
+    if (std::min(f1, f2) <= best_gcv) best_t = golden_t;
+  }
+  Trial best = run(best_t, true);
+  if (!best.ok) {
+    result.status = PenalizedFitResult::Status::NumericalError;
+    return result;
+  }
+  const std::vector<double> Z = band_inverse(best.L);
+
+  std::vector<HomogeneousPoint> Pw(start.homogeneous());
+  for (int i = 0; i < nu; ++i) {
+    for (int j = 0; j < nv; ++j) {
+      const int I = order.index(i, j);
+      const Vector3 d(best.D[3 * I], best.D[3 * I + 1], best.D[3 * I + 2]);
+      if (!d.allFinite()) {
+        result.status = PenalizedFitResult::Status::NumericalError;
+        return result;
+      }
+      HomogeneousPoint& h = Pw[static_cast<std::size_t>(i) * nv + j];
+      h.head<3>() += h.w() * d;
+    }
+  }
+  result.surface = Surface(start.U(), start.V(), std::move(Pw));
+  (void)thin_plate_energy(start, order, b, {}, &best.D, &result.span_roughness);
+  result.log10_smoothing = best.log10_smoothing;
+  result.lambda = best.lambda;
+  result.effective_dof = best.trace;
+  result.gcv = best.gcv;
+  result.rss = best.rss;
+  result.weight_sum = data.weight_sum;
+  result.points_used = data.used;
+
+  result.variance_factor.assign(n_points, 0.0);
+  const int p = start.p(), q = start.q();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_points, 1024), [&](const auto& range) {
+    RationalBasis rb;
+    int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
+    const int m = (p + 1) * (q + 1);
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      detail::rational_basis(start, params[k].u, params[k].v, rb);
+      for (int a = 0; a < m; ++a) idx[a] = order.index(rb.i0 + a / (q + 1), rb.j0 + a % (q + 1));
+      double v = 0.0;
+      for (int a = 0; a < m; ++a) {
+        for (int c = 0; c < m; ++c) {
+          const int I = std::min(idx[a], idx[c]), J = std::max(idx[a], idx[c]);
+          v += rb.R[a] * rb.R[c] * Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
+        }
+      }
+      result.variance_factor[k] = v;
+    }
+  });
+  result.status = PenalizedFitResult::Status::OK;
+  return result;
+}
+
+}  // namespace probecomp::fitting
