@@ -218,6 +218,21 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       chi2[s] += std::min(z * z, clip2);
       ++count[s];
     }
+    // A span's χ² and count pooled with its (up to) eight neighbours'.
+    struct Pooled {
+      double chi2 = 0.0;
+      int count = 0;
+    };
+    auto pooled = [&](std::size_t a, std::size_t b) {
+      Pooled n;
+      for (std::size_t a2 = a > 0 ? a - 1 : 0; a2 <= std::min(a + 1, nsu - 1); ++a2) {
+        for (std::size_t b2 = b > 0 ? b - 1 : 0; b2 <= std::min(b + 1, nsv - 1); ++b2) {
+          n.chi2 += chi2[a2 * nsv + b2];
+          n.count += count[a2 * nsv + b2];
+        }
+      }
+      return n;
+    };
     // The fit's local bias, estimated from the residuals' excess over the noise in each span and its eight
     // neighbours (pooled, for some forty points): b² = σ̂²·max(0, mean z² − 1). It enters each point's
     // uncertainty with the variance, so that u is a mean-square error, not only a variance: where the fit still
@@ -227,15 +242,8 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       std::vector<double> bias(nsu * nsv, 0.0);
       for (std::size_t a = 0; a < nsu; ++a) {
         for (std::size_t b = 0; b < nsv; ++b) {
-          double pooled = 0.0;
-          int pooled_count = 0;
-          for (std::size_t a2 = a > 0 ? a - 1 : 0; a2 <= std::min(a + 1, nsu - 1); ++a2) {
-            for (std::size_t b2 = b > 0 ? b - 1 : 0; b2 <= std::min(b + 1, nsv - 1); ++b2) {
-              pooled += chi2[a2 * nsv + b2];
-              pooled_count += count[a2 * nsv + b2];
-            }
-          }
-          if (pooled_count > 0) bias[a * nsv + b] = sigma * std::sqrt(std::max(0.0, pooled / pooled_count - 1.0));
+          const Pooled n = pooled(a, b);
+          if (n.count > 0) bias[a * nsv + b] = sigma * std::sqrt(std::max(0.0, n.chi2 / n.count - 1.0));
         }
       }
       for (std::size_t k = 0; k < points.size(); ++k) result.misfit[k] = bias[span[k]];
@@ -255,15 +263,8 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
         if (count[s] == 0) continue;
         bool unexplained = chi2[s] > chi2_upper_quantile(count[s], alpha);
         if (!unexplained && chi2[s] > count[s]) {
-          double pooled = 0.0;
-          int pooled_count = 0;
-          for (std::size_t a2 = a > 0 ? a - 1 : 0; a2 <= std::min(a + 1, nsu - 1); ++a2) {
-            for (std::size_t b2 = b > 0 ? b - 1 : 0; b2 <= std::min(b + 1, nsv - 1); ++b2) {
-              pooled += chi2[a2 * nsv + b2];
-              pooled_count += count[a2 * nsv + b2];
-            }
-          }
-          unexplained = pooled > chi2_upper_quantile(pooled_count, alpha);
+          const Pooled n = pooled(a, b);
+          unexplained = n.chi2 > chi2_upper_quantile(n.count, alpha);
         }
         if (!unexplained) continue;
         ++result.spans_above_noise;

@@ -122,6 +122,19 @@ std::vector<double> band_inverse(const Band& L) {
   return z;
 }
 
+// rᵀ·Z·r over the unknowns idx[0..m) (all within the band of each other), Z in band_inverse's layout: a basis
+// row's variance factor.
+double band_quadratic_form(const std::vector<double>& Z, int b, const int* idx, const double* r, int m) {
+  double v = 0.0;
+  for (int a = 0; a < m; ++a) {
+    for (int c = 0; c < m; ++c) {
+      const int I = std::min(idx[a], idx[c]), J = std::max(idx[a], idx[c]);
+      v += r[a] * r[c] * Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
+    }
+  }
+  return v;
+}
+
 bool inside(const nurbs::Domain& d, const SurfaceParameter& t) {
   return t.u >= d.u0 && t.u <= d.u1 && t.v >= d.v0 && t.v <= d.v1;
 }
@@ -278,12 +291,12 @@ Band thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span
 struct Trial {
   bool ok = false;
   double log10_smoothing = 0.0, lambda = 0.0;
-  double rss = 0.0, trace = 0.0, gcv = std::numeric_limits<double>::infinity();
-  Band L;
+  double rss = 0.0, trace = 0.0, cv_score = std::numeric_limits<double>::infinity();
+  std::vector<double> Z;  // the band of the inverse (kept with `keep_factor`)
   std::vector<double> D;  // n × 3
 };
 
-// Each point's leverage-free basis row and data, for the leave-one-out score.
+// The points, their parameters and weights and the fit's basis, for the leave-one-out score.
 struct PointRows {
   const Surface& s;
   const Ordering& order;
@@ -325,13 +338,7 @@ double leave_one_out(const PointRows& rows, const std::vector<double>& D, const 
         const std::size_t I = static_cast<std::size_t>(idx[a]);
         fitted += rb.R[a] * (s.control_point(i, j) + Vector3(D[3 * I], D[3 * I + 1], D[3 * I + 2]));
       }
-      double v = 0.0;
-      for (int a = 0; a < m; ++a) {
-        for (int c = 0; c < m; ++c) {
-          const int I = std::min(idx[a], idx[c]), J = std::max(idx[a], idx[c]);
-          v += rb.R[a] * rb.R[c] * Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
-        }
-      }
+      const double v = band_quadratic_form(Z, b, idx, rb.R, m);
       const double one_minus_h = std::max(1.0 - w * v, 1e-6);
       sum += w * (fitted - rows.points[k]).squaredNorm() / (one_minus_h * one_minus_h);
     }
@@ -368,7 +375,7 @@ Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double 
     }
   }
   t.rss = std::max(data.yWy - 2.0 * cross + quad, 0.0);
-  const std::vector<double> Z = band_inverse(N);
+  std::vector<double> Z = band_inverse(N);
   double trace = 0.0;
   for (int I = 0; I < n; ++I) {
     for (int J = std::max(0, I - b); J <= I; ++J) {
@@ -378,11 +385,9 @@ Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double 
     }
   }
   t.trace = trace;
-  const double m = static_cast<double>(data.used);
-  (void)m;
-  t.gcv = leave_one_out(rows, t.D, Z, b) / data.weight_sum;
+  t.cv_score = leave_one_out(rows, t.D, Z, b) / data.weight_sum;
   t.ok = std::isfinite(t.rss) && std::isfinite(trace);
-  if (keep_factor) t.L = std::move(N);
+  if (keep_factor) t.Z = std::move(Z);
   return t;
 }
 
@@ -421,12 +426,12 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     best_t = *options.log10_smoothing;
   } else {
     // A scan in decades, then golden sections of the best decade's two neighbours.
-    double best_gcv = std::numeric_limits<double>::infinity();
+    double best_score = std::numeric_limits<double>::infinity();
     best_t = options.max_log10_smoothing;
     for (double t10 = options.min_log10_smoothing; t10 <= options.max_log10_smoothing + 1e-9; t10 += options.scan_step) {
       const Trial t = run(t10, false);
-      if (t.ok && t.gcv < best_gcv) {
-        best_gcv = t.gcv;
+      if (t.ok && t.cv_score < best_score) {
+        best_score = t.cv_score;
         best_t = t10;
       }
     }
@@ -434,31 +439,31 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     double lo = std::max(best_t - options.scan_step, options.min_log10_smoothing);
     double hi = std::min(best_t + options.scan_step, options.max_log10_smoothing);
     double x1 = hi - kGolden * (hi - lo), x2 = lo + kGolden * (hi - lo);
-    double f1 = run(x1, false).gcv, f2 = run(x2, false).gcv;
+    double f1 = run(x1, false).cv_score, f2 = run(x2, false).cv_score;
     for (int step = 0; step < options.golden_steps; ++step) {
       if (f1 <= f2) {
         hi = x2;
         x2 = x1;
         f2 = f1;
         x1 = hi - kGolden * (hi - lo);
-        f1 = run(x1, false).gcv;
+        f1 = run(x1, false).cv_score;
       } else {
         lo = x1;
         x1 = x2;
         f1 = f2;
         x2 = lo + kGolden * (hi - lo);
-        f2 = run(x2, false).gcv;
+        f2 = run(x2, false).cv_score;
       }
     }
     const double golden_t = f1 <= f2 ? x1 : x2;
-    if (std::min(f1, f2) <= best_gcv) best_t = golden_t;
+    if (std::min(f1, f2) <= best_score) best_t = golden_t;
   }
   Trial best = run(best_t, true);
   if (!best.ok) {
     result.status = PenalizedFitResult::Status::NumericalError;
     return result;
   }
-  const std::vector<double> Z = band_inverse(best.L);
+  const std::vector<double>& Z = best.Z;
 
   std::vector<HomogeneousPoint> Pw(start.homogeneous());
   for (int i = 0; i < nu; ++i) {
@@ -478,7 +483,7 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   result.log10_smoothing = best.log10_smoothing;
   result.lambda = best.lambda;
   result.effective_dof = best.trace;
-  result.gcv = best.gcv;
+  result.cv_score = best.cv_score;
   result.rss = best.rss;
   result.weight_sum = data.weight_sum;
   result.points_used = data.used;
@@ -492,13 +497,7 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     for (std::size_t k = range.begin(); k != range.end(); ++k) {
       detail::rational_basis(start, params[k].u, params[k].v, rb);
       for (int a = 0; a < m; ++a) idx[a] = order.index(rb.i0 + a / (q + 1), rb.j0 + a % (q + 1));
-      double v = 0.0;
-      for (int a = 0; a < m; ++a) {
-        for (int c = 0; c < m; ++c) {
-          const int I = std::min(idx[a], idx[c]), J = std::max(idx[a], idx[c]);
-          v += rb.R[a] * rb.R[c] * Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
-        }
-      }
+      const double v = band_quadratic_form(Z, b, idx, rb.R, m);
       result.variance_factor[k] = v;
     }
   });

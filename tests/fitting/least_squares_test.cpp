@@ -16,20 +16,7 @@ namespace {
 
 using nurbs::Surface;
 
-// The truth with every control point moved by up to `amount` mm in each coordinate; weights unchanged.
-Surface perturbed(const Surface& s, double amount, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> d(-amount, amount);
-  std::vector<Point3> P;
-  std::vector<double> w;
-  for (int i = 0; i < s.num_u(); ++i) {
-    for (int j = 0; j < s.num_v(); ++j) {
-      P.push_back(s.control_point(i, j) + Vector3(d(rng), d(rng), d(rng)));
-      w.push_back(s.weight(i, j));
-    }
-  }
-  return Surface(s.U(), s.V(), P, w);
-}
+using testing::perturbed;
 
 struct Samples {
   std::vector<Point3> points;

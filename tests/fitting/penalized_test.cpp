@@ -16,19 +16,7 @@ namespace {
 
 using nurbs::Surface;
 
-Surface moved(const Surface& s, double amount, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> d(-amount, amount);
-  std::vector<Point3> P;
-  std::vector<double> w;
-  for (int i = 0; i < s.num_u(); ++i) {
-    for (int j = 0; j < s.num_v(); ++j) {
-      P.push_back(s.control_point(i, j) + Vector3(d(rng), d(rng), d(rng)));
-      w.push_back(s.weight(i, j));
-    }
-  }
-  return Surface(s.U(), s.V(), P, w);
-}
+using testing::perturbed;
 
 struct Samples {
   std::vector<Point3> points;
@@ -65,7 +53,7 @@ double worst_gap(const Surface& a, const Surface& b) {
 
 TEST(FitPenalized, ExactDataFromASurfaceWithTheSameKnotsAreFollowedToASmallFractionOfAMicrometre) {
   const Surface truth = testing::random_rational_surface(3, {.nu = 8, .nv = 7});
-  const Surface start = moved(truth, 0.5, 4);
+  const Surface start = perturbed(truth, 0.5, 4);
   const Samples data = sample(truth, 3000, 0.0, 5);
   const PenalizedFitResult fit = fit_penalized(start, data.points, data.params);
   ASSERT_TRUE(fit.ok());

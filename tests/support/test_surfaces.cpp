@@ -107,4 +107,18 @@ std::vector<Point3> random_points_near(const nurbs::Surface& s, std::size_t n, d
   return out;
 }
 
+nurbs::Surface perturbed(const nurbs::Surface& s, double amount, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> d(-amount, amount);
+  std::vector<Point3> P;
+  std::vector<double> w;
+  for (int i = 0; i < s.num_u(); ++i) {
+    for (int j = 0; j < s.num_v(); ++j) {
+      P.push_back(s.control_point(i, j) + Vector3(d(rng), d(rng), d(rng)));
+      w.push_back(s.weight(i, j));
+    }
+  }
+  return nurbs::Surface(s.U(), s.V(), P, w);
+}
+
 }  // namespace probecomp::testing

@@ -31,6 +31,9 @@ struct RandomSurfaceSpec {
 // extruded 30 mm in z (degree 1). Neighbouring sheets are 6 mm apart.
 [[nodiscard]] nurbs::Surface spiral_sheet();
 
+// `s` with every control point moved by up to `amount` mm in each coordinate (uniform); weights unchanged.
+[[nodiscard]] nurbs::Surface perturbed(const nurbs::Surface& s, double amount, std::uint64_t seed);
+
 // n points S(u,v) + t·n(u,v) with (u,v) uniform on the domain and t uniform in [-max_offset, max_offset].
 [[nodiscard]] std::vector<Point3> random_points_near(const nurbs::Surface& s, std::size_t n, double max_offset,
                                                      std::uint64_t seed);

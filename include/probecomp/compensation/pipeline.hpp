@@ -136,7 +136,7 @@ struct FitOptions {
   //  - no parameter correction: projecting the points on the fit lets those at the data's corners slide out
   //    into the ill-determined spans (largest error 0.36 mm with two corrections at σ = 10 µm, 0.017 mm
   //    without), and the registration's (u, v) serve as well elsewhere at half the fitting time.
-  fitting::AdaptiveFitOptions surface{.parameter_corrections = 0};
+  fitting::AdaptiveFitOptions surface{.fit = {}, .parameter_corrections = 0};
   // A face is fitted when it holds at least this many points per control point of its offset surface; fewer
   // cannot average the noise out (its points fall back to the nominal normal).
   double min_points_per_control_point = 2.0;

@@ -54,7 +54,7 @@ struct AdaptiveFitResult {
   enum class Status {
     OK,               // every span's residuals are consistent with the noise estimate
     NoiseNotReached,  // stopped (data support or rounds) with `spans_above_noise` spans still unexplained
-    NotDone,          // bad input (see fit_control_points)
+    NotDone,          // bad input (see fit_penalized)
     NumericalError,
   };
   Status status = Status::NotDone;

@@ -31,7 +31,8 @@
 namespace probecomp::fitting {
 
 struct PenalizedFitOptions {
-  // A fixed smoothing (log10 of λ relative to trace(AᵀWA) / trace(G)); empty: chosen by GCV in the range below.
+  // A fixed smoothing (log10 of λ relative to trace(AᵀWA) / trace(G)); empty: chosen by cross-validation in the
+  // range below.
   std::optional<double> log10_smoothing;
   // The search: a scan in steps of `scan_step` decades over [min, max], then a golden-section search between the
   // best step's two neighbours. The score is smooth and has one minimum in practice, so the scan only brackets it. Relative λ of 1e-9 lets the fit follow noise-free data to a few hundredths of a micrometre;
@@ -55,7 +56,7 @@ struct PenalizedFitResult {
   double log10_smoothing = 0.0;     // the λ used, relative (see the options)
   double lambda = 0.0;              // the λ used, absolute
   double effective_dof = 0.0;       // tr H: the fit's effective number of parameters per coordinate
-  double gcv = 0.0;                 // its cross-validation score (mean squared prediction error), mm²
+  double cv_score = 0.0;            // its cross-validation score (mean squared prediction error), mm²
   double rss = 0.0;                 // Σ w_k |S(u_k,v_k) − x_k|², mm²
   double weight_sum = 0.0;          // Σ w_k
   int points_used = 0;              // points with w_k > 0
