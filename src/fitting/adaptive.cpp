@@ -42,6 +42,10 @@ std::vector<double> normal_residuals(const Surface& s, std::span<const Point3> p
 // misses shape: then the differences tell the noise.
 constexpr double kMisfitRatio = 1.25;
 
+// A neighbourhood's mean-square excess counts as bias only above the χ² quantile exceeded by noise alone with
+// this probability (see the bias estimate in fit_surface).
+constexpr double kBiasSignificance = 0.01;
+
 // The upper quantile z with P(N(0,1) > z) = alpha (Abramowitz and Stegun 26.2.23, error below 4.5e-4).
 double normal_upper_quantile(double alpha) {
   const double t = std::sqrt(-2.0 * std::log(alpha));
@@ -137,6 +141,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   std::size_t used = 0;
   for (std::size_t k = 0; k < points.size(); ++k) used += weights.empty() || (k < weights.size() && weights[k] > 0.0);
   Surface current = start;
+  Surface target = start;
   std::vector<std::uint32_t> computed;
   if (given_neighbours.size() != points.size()) computed = nearest_neighbours(points);
   const std::span<const std::uint32_t> neighbours = computed.empty() ? given_neighbours : std::span<const std::uint32_t>(computed);
@@ -147,10 +152,13 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   std::vector<double> span_weight(static_cast<std::size_t>(current.U().num_spans() * current.V().num_spans()), 1.0);
   PenalizedFitOptions fit_options = options.fit;
   for (int round = 0;; ++round) {
-    PenalizedFitResult fit = fit_penalized(current, points, t, weights, fit_options, span_weight);
+    // The penalty measures the displacement from `target`, the start with the knots inserted so far (the same
+    // surface exactly): never from the last round's fit, which would make the final surface a cascade of fits
+    // whose variance the last one's hat matrix does not describe.
+    PenalizedFitResult fit = fit_penalized(target, points, t, weights, fit_options, span_weight);
     for (int c = 0; c < options.parameter_corrections && fit.ok(); ++c) {
       t = correct_parameters(fit.surface, points, t);
-      fit = fit_penalized(fit.surface, points, t, weights, fit_options, span_weight);
+      fit = fit_penalized(target, points, t, weights, fit_options, span_weight);
     }
     if (!fit.ok()) {
       result.status = fit.status == PenalizedFitResult::Status::NotDone ? AdaptiveFitResult::Status::NotDone
@@ -201,7 +209,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     const std::vector<double> bu = current.U().breakpoints();
     const std::vector<double> bv = current.V().breakpoints();
     const std::size_t nsu = bu.size() - 1, nsv = bv.size() - 1;
-    std::vector<double> chi2(nsu * nsv, 0.0);
+    std::vector<double> chi2(nsu * nsv, 0.0), sum_r(nsu * nsv, 0.0), sum_free(nsu * nsv, 0.0);
     std::vector<int> count(nsu * nsv, 0);
     // Each point's span in parallel; the sums in point order (the same whatever the thread count).
     std::vector<std::size_t> span(points.size());
@@ -216,34 +224,54 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       const std::size_t s = span[k];
       const double z = standardised[k] / sigma;
       chi2[s] += std::min(z * z, clip2);
+      sum_r[s] += result.residuals[k];
+      sum_free[s] += std::max(1.0 - (weights.empty() ? 1.0 : weights[k]) * vf[k], 0.0);
       ++count[s];
     }
     // A span's χ² and count pooled with its (up to) eight neighbours'.
     struct Pooled {
-      double chi2 = 0.0;
+      double chi2 = 0.0, sum_r = 0.0, sum_free = 0.0;
       int count = 0;
     };
     auto pooled = [&](std::size_t a, std::size_t b) {
       Pooled n;
       for (std::size_t a2 = a > 0 ? a - 1 : 0; a2 <= std::min(a + 1, nsu - 1); ++a2) {
         for (std::size_t b2 = b > 0 ? b - 1 : 0; b2 <= std::min(b + 1, nsv - 1); ++b2) {
-          n.chi2 += chi2[a2 * nsv + b2];
-          n.count += count[a2 * nsv + b2];
+          const std::size_t s2 = a2 * nsv + b2;
+          n.chi2 += chi2[s2];
+          n.sum_r += sum_r[s2];
+          n.sum_free += sum_free[s2];
+          n.count += count[s2];
         }
       }
       return n;
     };
-    // The fit's local bias, estimated from the residuals' excess over the noise in each span and its eight
-    // neighbours (pooled, for some forty points): b² = σ̂²·max(0, mean z² − 1). It enters each point's
-    // uncertainty with the variance, so that u is a mean-square error, not only a variance: where the fit still
-    // misses shape the noise cannot hide (and on exact data, where there is no noise at all).
+    // The fit's local bias b_k = E[r_k], estimated over each span and its eight neighbours (pooled: tens of
+    // points; fewer, closer ones where refinement made the spans small), so that u is a root-mean-square error,
+    // not only a standard deviation: where the fit still misses shape the noise cannot hide, and on exact data.
+    // Two estimates, the larger taken:
+    //  - the residuals' mean, squared, less its own variance σ²·Σ(1 − h_k)/n²: a misfit of one sign across the
+    //    neighbourhood (a broad shape smoothed a little too much), seen through noise far larger than itself;
+    //  - the residuals' mean square over the noise, σ²·(mean z² − 1), when the neighbourhood's χ² is significant
+    //    (at the span test's 1 %): a misfit that changes sign inside the neighbourhood (a narrow feature), which
+    //    the mean cancels. Unless significant it is left out: on noise alone it would add a random share of σ².
     result.misfit.assign(points.size(), 0.0);
     {
       std::vector<double> bias(nsu * nsv, 0.0);
       for (std::size_t a = 0; a < nsu; ++a) {
         for (std::size_t b = 0; b < nsv; ++b) {
           const Pooled n = pooled(a, b);
-          if (n.count > 0) bias[a * nsv + b] = sigma * std::sqrt(std::max(0.0, n.chi2 / n.count - 1.0));
+          if (n.count == 0) {
+            bias[a * nsv + b] = options.noise_floor;
+            continue;
+          }
+          const double mean = n.sum_r / n.count;
+          double b2 = std::max(0.0, mean * mean - sigma * sigma * n.sum_free / (static_cast<double>(n.count) * n.count));
+          if (n.chi2 > chi2_upper_quantile(n.count, kBiasSignificance)) {
+            b2 = std::max(b2, sigma * sigma * (n.chi2 / n.count - 1.0));
+          }
+          // Never below the noise floor: the fit does not claim the surface to better than what a CMM resolves.
+          bias[a * nsv + b] = std::max(std::sqrt(b2), options.noise_floor);
         }
       }
       for (std::size_t k = 0; k < points.size(); ++k) result.misfit[k] = bias[span[k]];
@@ -321,8 +349,14 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       result.status = AdaptiveFitResult::Status::NoiseNotReached;
       return result;
     }
-    if (!xu.empty()) current = nurbs::refine_knots_u(current, xu);
-    if (!xv.empty()) current = nurbs::refine_knots_v(current, xv);
+    if (!xu.empty()) {
+      current = nurbs::refine_knots_u(current, xu);
+      target = nurbs::refine_knots_u(target, xu);
+    }
+    if (!xv.empty()) {
+      current = nurbs::refine_knots_v(current, xv);
+      target = nurbs::refine_knots_v(target, xv);
+    }
     // Each new span inherits the weight of the span it was cut from.
     if (!xu.empty() || !xv.empty()) {
       const std::vector<double> nbu = current.U().breakpoints();
