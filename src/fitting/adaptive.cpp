@@ -140,7 +140,9 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   std::vector<SurfaceParameter> t(params.begin(), params.end());
   std::size_t used = 0;
   for (std::size_t k = 0; k < points.size(); ++k) used += weights.empty() || (k < weights.size() && weights[k] > 0.0);
-  Surface current = start;
+  // The knots so far on the start's exact shape: what each round's fit penalises the displacement from (never
+  // the last round's fit, which would make the final surface a cascade of fits whose variance the last one's
+  // hat matrix does not describe).
   Surface target = start;
   std::vector<std::uint32_t> computed;
   if (given_neighbours.size() != points.size()) computed = nearest_neighbours(points);
@@ -149,12 +151,9 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   // The penalty's weight per knot span (a · V spans + b): lowered where the data show shape the fit misses, so
   // that the flexibility added there is not smoothed away by a λ that suits the rest of the face, nor spread
   // over it (knot lines run across the whole face; their new spans elsewhere keep the full penalty).
-  std::vector<double> span_weight(static_cast<std::size_t>(current.U().num_spans() * current.V().num_spans()), 1.0);
+  std::vector<double> span_weight(static_cast<std::size_t>(target.U().num_spans() * target.V().num_spans()), 1.0);
   PenalizedFitOptions fit_options = options.fit;
   for (int round = 0;; ++round) {
-    // The penalty measures the displacement from `target`, the start with the knots inserted so far (the same
-    // surface exactly): never from the last round's fit, which would make the final surface a cascade of fits
-    // whose variance the last one's hat matrix does not describe.
     PenalizedFitResult fit = fit_penalized(target, points, t, weights, fit_options, span_weight);
     for (int c = 0; c < options.parameter_corrections && fit.ok(); ++c) {
       t = correct_parameters(fit.surface, points, t);
@@ -165,12 +164,11 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
                                                                         : AdaptiveFitResult::Status::NumericalError;
       return result;
     }
-    current = fit.surface;
-    const int unknowns = current.num_u() * current.num_v();
+    const int unknowns = target.num_u() * target.num_v();
 
-    result.surface = current;
+    result.surface = fit.surface;
     result.params = t;
-    result.residuals = normal_residuals(current, points, t);
+    result.residuals = normal_residuals(fit.surface, points, t);
     result.control_points = unknowns;
     result.effective_dof = fit.effective_dof;
     result.log10_smoothing = fit.log10_smoothing;
@@ -178,10 +176,10 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     const std::vector<double>& vf = result.variance_factor;
     // A residual's variance is σ²(1 − h_k) (h_k = w_k · variance factor, the point's leverage): residuals
     // divided by √(1 − h_k) all have variance σ² whatever the local flexibility of the fit.
-    std::vector<double> standardised(points.size());
+    std::vector<double> leverage(points.size()), standardised(points.size());
     for (std::size_t k = 0; k < points.size(); ++k) {
-      const double h = (weights.empty() ? 1.0 : weights[k]) * vf[k];
-      standardised[k] = result.residuals[k] / std::sqrt(std::max(1.0 - h, 0.05));
+      leverage[k] = (weights.empty() ? 1.0 : weights[k]) * vf[k];
+      standardised[k] = result.residuals[k] / std::sqrt(std::max(1.0 - leverage[k], 0.05));
     }
     // The spread of the residuals overstates the noise while the fit still misses a shape that covers much of
     // the face (a broad deformation): then the differences between neighbours, which that misfit barely
@@ -206,8 +204,8 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
 
     // Which spans' residuals the noise does not explain.
     const double sigma = std::max(result.noise_sigma, options.noise_floor);
-    const std::vector<double> bu = current.U().breakpoints();
-    const std::vector<double> bv = current.V().breakpoints();
+    const std::vector<double> bu = target.U().breakpoints();
+    const std::vector<double> bv = target.V().breakpoints();
     const std::size_t nsu = bu.size() - 1, nsv = bv.size() - 1;
     std::vector<double> chi2(nsu * nsv, 0.0), sum_r(nsu * nsv, 0.0), sum_free(nsu * nsv, 0.0);
     std::vector<int> count(nsu * nsv, 0);
@@ -225,7 +223,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       const double z = standardised[k] / sigma;
       chi2[s] += std::min(z * z, clip2);
       sum_r[s] += result.residuals[k];
-      sum_free[s] += std::max(1.0 - (weights.empty() ? 1.0 : weights[k]) * vf[k], 0.0);
+      sum_free[s] += std::max(1.0 - leverage[k], 0.0);
       ++count[s];
     }
     // A span's χ² and count pooled with its (up to) eight neighbours'.
@@ -337,8 +335,8 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     }
     std::vector<double> xu = flagged_span_midpoints(bu, flag_u);
     std::vector<double> xv = flagged_span_midpoints(bv, flag_v);
-    const double after = static_cast<double>(current.num_u() + static_cast<int>(xu.size())) *
-                         static_cast<double>(current.num_v() + static_cast<int>(xv.size()));
+    const double after = static_cast<double>(target.num_u() + static_cast<int>(xu.size())) *
+                         static_cast<double>(target.num_v() + static_cast<int>(xv.size()));
     if (after * (result.noise_sigma <= options.noise_floor ? options.min_points_per_control_point_noise_free
                                                            : options.min_points_per_control_point) >
         static_cast<double>(used)) {
@@ -349,18 +347,12 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       result.status = AdaptiveFitResult::Status::NoiseNotReached;
       return result;
     }
-    if (!xu.empty()) {
-      current = nurbs::refine_knots_u(current, xu);
-      target = nurbs::refine_knots_u(target, xu);
-    }
-    if (!xv.empty()) {
-      current = nurbs::refine_knots_v(current, xv);
-      target = nurbs::refine_knots_v(target, xv);
-    }
+    if (!xu.empty()) target = nurbs::refine_knots_u(target, xu);
+    if (!xv.empty()) target = nurbs::refine_knots_v(target, xv);
     // Each new span inherits the weight of the span it was cut from.
     if (!xu.empty() || !xv.empty()) {
-      const std::vector<double> nbu = current.U().breakpoints();
-      const std::vector<double> nbv = current.V().breakpoints();
+      const std::vector<double> nbu = target.U().breakpoints();
+      const std::vector<double> nbv = target.V().breakpoints();
       std::vector<double> w((nbu.size() - 1) * (nbv.size() - 1));
       for (std::size_t a = 0; a + 1 < nbu.size(); ++a) {
         const std::size_t oa = static_cast<std::size_t>(span_of(bu, 0.5 * (nbu[a] + nbu[a + 1])));

@@ -1,6 +1,6 @@
 #pragma once
 // Penalised surface fit refined where the data demand it (DESIGN.md §2 steps 4–5): fit the control points with
-// the smoothing chosen by GCV (fitting/penalized.hpp), optionally correct the points' parameters by projecting
+// the smoothing chosen by cross-validation (fitting/penalized.hpp), optionally correct the points' parameters by projecting
 // them on the fit, estimate the measurement noise robustly from the residuals, and insert knots in the spans
 // whose residuals the noise does not explain; repeat until every span is consistent with the noise, the data
 // can support no more control points, or the rounds run out.
