@@ -292,7 +292,7 @@ struct Trial {
   bool ok = false;
   double log10_smoothing = 0.0, lambda = 0.0;
   double rss = 0.0, trace = 0.0, cv_score = std::numeric_limits<double>::infinity();
-  std::vector<double> Z;  // the band of the inverse (kept with `keep_factor`)
+  std::vector<double> Z;  // the band of the inverse (for tr H, the leverages and the variance factors)
   std::vector<double> D;  // n × 3
 };
 
@@ -350,7 +350,7 @@ double leave_one_out(const PointRows& rows, const std::vector<double>& D, const 
 }
 
 Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double ridge, double log10_smoothing,
-               bool keep_factor, const PointRows& rows) {
+               const PointRows& rows) {
   Trial t;
   t.log10_smoothing = log10_smoothing;
   t.lambda = std::pow(10.0, log10_smoothing) * scale_ratio;
@@ -387,7 +387,7 @@ Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double 
   t.trace = trace;
   t.cv_score = leave_one_out(rows, t.D, Z, b) / data.weight_sum;
   t.ok = std::isfinite(t.rss) && std::isfinite(trace);
-  if (keep_factor) t.Z = std::move(Z);
+  t.Z = std::move(Z);
   return t;
 }
 
@@ -417,48 +417,44 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   const double ridge = options.ridge * data_trace / n;
 
   const PointRows rows{start, order, points, params, weights};
-  auto run = [&](double t10, bool keep) {
+  auto run = [&](double t10) {
     ++result.evaluations;
-    return evaluate(data, G, scale_ratio, ridge, t10, keep, rows);
+    return evaluate(data, G, scale_ratio, ridge, t10, rows);
   };
-  double best_t = 0.0;
+  // Each trial keeps its factor's band inverse, so the best one is used as it is, not evaluated again.
+  Trial best;
   if (options.log10_smoothing) {
-    best_t = *options.log10_smoothing;
+    best = run(*options.log10_smoothing);
   } else {
     // A scan in decades, then golden sections of the best decade's two neighbours.
-    double best_score = std::numeric_limits<double>::infinity();
-    best_t = options.max_log10_smoothing;
     for (double t10 = options.min_log10_smoothing; t10 <= options.max_log10_smoothing + 1e-9; t10 += options.scan_step) {
-      const Trial t = run(t10, false);
-      if (t.ok && t.cv_score < best_score) {
-        best_score = t.cv_score;
-        best_t = t10;
-      }
+      Trial t = run(t10);
+      if (t.ok && t.cv_score < best.cv_score) best = std::move(t);
     }
+    const double best_t = best.ok ? best.log10_smoothing : options.max_log10_smoothing;
     constexpr double kGolden = 0.6180339887498949;
     double lo = std::max(best_t - options.scan_step, options.min_log10_smoothing);
     double hi = std::min(best_t + options.scan_step, options.max_log10_smoothing);
     double x1 = hi - kGolden * (hi - lo), x2 = lo + kGolden * (hi - lo);
-    double f1 = run(x1, false).cv_score, f2 = run(x2, false).cv_score;
+    Trial t1 = run(x1), t2 = run(x2);
     for (int step = 0; step < options.golden_steps; ++step) {
-      if (f1 <= f2) {
+      if (t1.cv_score <= t2.cv_score) {
         hi = x2;
         x2 = x1;
-        f2 = f1;
+        t2 = std::move(t1);
         x1 = hi - kGolden * (hi - lo);
-        f1 = run(x1, false).cv_score;
+        t1 = run(x1);
       } else {
         lo = x1;
         x1 = x2;
-        f1 = f2;
+        t1 = std::move(t2);
         x2 = lo + kGolden * (hi - lo);
-        f2 = run(x2, false).cv_score;
+        t2 = run(x2);
       }
     }
-    const double golden_t = f1 <= f2 ? x1 : x2;
-    if (std::min(f1, f2) <= best_score) best_t = golden_t;
+    Trial& golden = t1.cv_score <= t2.cv_score ? t1 : t2;
+    if (golden.cv_score <= best.cv_score) best = std::move(golden);
   }
-  Trial best = run(best_t, true);
   if (!best.ok) {
     result.status = PenalizedFitResult::Status::NumericalError;
     return result;
