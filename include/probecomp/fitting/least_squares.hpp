@@ -35,12 +35,15 @@ struct FitOptions {
   double convergence = 1e-11;
 };
 
+// The outcome of one fit of the control points on fixed knots (fit_control_points, fit_penalized).
+enum class FitStatus {
+  OK,              // fitted
+  NotDone,         // bad input: counts differ, no points, a parameter or point not finite, a negative weight
+  NumericalError,  // the factorisation failed or produced non-finite control points
+};
+
 struct FitResult {
-  enum class Status {
-    OK,              // fitted
-    NotDone,         // bad input: counts differ, no points, a parameter or point not finite, a negative weight
-    NumericalError,  // the factorisation failed or produced non-finite control points
-  };
+  using Status = FitStatus;
   Status status = Status::NotDone;
   nurbs::Surface surface;  // the fit (the start surface unless status is OK)
   int iterations = 0;      // proximal iterations

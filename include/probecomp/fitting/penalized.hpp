@@ -17,9 +17,9 @@
 // the fitted values: the λ whose fit predicts left-out points best, needing no noise estimate. (Not the
 // generalised form, which replaces each h_k by their mean: on scattered points and a fine basis it cannot see a
 // point that alone holds a control point, and picks a fit that swings between points of exact data.) tr H (the
-// fit's effective degrees of freedom) and each point's hat diagonal come from the entries of (AᵀWA + λG)⁻¹ inside its
-// band, by the Takahashi recurrence on the band Cholesky factor (Takahashi, Fagan and Chin 1973; the "selected
-// inversion" of sparse solvers), in O(K·b²) for K control points and bandwidth b, like the factorisation.
+// fit's effective degrees of freedom) and each point's hat diagonal come from the entries of (AᵀWA + λG)⁻¹
+// inside its band, by the Takahashi recurrence on the band Cholesky factor (Takahashi, Fagan and Chin 1973; the
+// "selected inversion" of sparse solvers), in O(K·b²) for K control points and bandwidth b, like the factorisation.
 
 #include <optional>
 #include <span>
@@ -35,8 +35,9 @@ struct PenalizedFitOptions {
   // range below.
   std::optional<double> log10_smoothing;
   // The search: a scan in steps of `scan_step` decades over [min, max], then a golden-section search between the
-  // best step's two neighbours. The score is smooth and has one minimum in practice, so the scan only brackets it. Relative λ of 1e-9 lets the fit follow noise-free data to a few hundredths of a micrometre;
-  // 1e3 is far beyond where the energy dominates any data set (the fit is then S⁰ plus a linear displacement).
+  // best step's two neighbours. The score is smooth and has one minimum in practice, so the scan only brackets
+  // it. Relative λ of 1e-9 lets the fit follow noise-free data to a few hundredths of a micrometre; 1e3 is far
+  // beyond where the energy dominates any data set (the fit is then S⁰ plus a linear displacement).
   double min_log10_smoothing = -9.0;
   double max_log10_smoothing = 3.0;
   double scan_step = 1.5;
@@ -46,11 +47,7 @@ struct PenalizedFitOptions {
 };
 
 struct PenalizedFitResult {
-  enum class Status {
-    OK,              // fitted
-    NotDone,         // bad input: counts differ, no points, a parameter or point not finite, a negative weight
-    NumericalError,  // the factorisation failed or produced non-finite control points
-  };
+  using Status = FitStatus;
   Status status = Status::NotDone;
   nurbs::Surface surface;           // the fit (the start surface unless OK)
   double log10_smoothing = 0.0;     // the λ used, relative (see the options)
