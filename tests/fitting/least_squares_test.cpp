@@ -7,7 +7,6 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
-#include <random>
 
 #include "support/test_surfaces.hpp"
 
@@ -18,26 +17,12 @@ using nurbs::Surface;
 
 using testing::perturbed;
 
-struct Samples {
-  std::vector<Point3> points;
-  std::vector<SurfaceParameter> params;
-};
+using Samples = testing::SurfaceSamples;
 
-// n points at uniform random parameters with u ≤ u_max (a fraction of the domain), moved along the normal by
+// n points at uniform random parameters with u in the first `u_fraction` of the domain, moved along the normal by
 // Gaussian noise of standard deviation sigma.
 Samples sample(const Surface& s, std::size_t n, double sigma, std::uint64_t seed, double u_fraction = 1.0) {
-  std::mt19937_64 rng(seed);
-  const nurbs::Domain d = s.domain();
-  std::uniform_real_distribution<double> u(d.u0, d.u0 + u_fraction * (d.u1 - d.u0)), v(d.v0, d.v1);
-  std::normal_distribution<double> noise(0.0, sigma);
-  Samples out;
-  for (std::size_t k = 0; k < n; ++k) {
-    const SurfaceParameter t{u(rng), v(rng)};
-    const Point3 x = nurbs::evaluate(s, t.u, t.v) + (sigma > 0.0 ? noise(rng) : 0.0) * nurbs::unit_normal(s, t.u, t.v).n;
-    out.points.push_back(x);
-    out.params.push_back(t);
-  }
-  return out;
+  return testing::sample_surface(s, n, sigma, seed, testing::Noise::AlongNormal, u_fraction);
 }
 
 struct Deviation {

@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 
 #include "support/test_surfaces.hpp"
 
@@ -18,25 +17,11 @@ using nurbs::Surface;
 
 using testing::perturbed;
 
-struct Samples {
-  std::vector<Point3> points;
-  std::vector<SurfaceParameter> params;
-};
+using Samples = testing::SurfaceSamples;
 
+// n points at uniform random parameters, moved by Gaussian noise of standard deviation sigma in each coordinate.
 Samples sample(const Surface& s, std::size_t n, double sigma, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  const nurbs::Domain d = s.domain();
-  std::uniform_real_distribution<double> u(d.u0, d.u1), v(d.v0, d.v1);
-  std::normal_distribution<double> noise(0.0, sigma);
-  Samples out;
-  for (std::size_t k = 0; k < n; ++k) {
-    const SurfaceParameter t{u(rng), v(rng)};
-    Point3 x = nurbs::evaluate(s, t.u, t.v);
-    if (sigma > 0.0) x += Vector3(noise(rng), noise(rng), noise(rng));
-    out.points.push_back(x);
-    out.params.push_back(t);
-  }
-  return out;
+  return testing::sample_surface(s, n, sigma, seed, testing::Noise::Isotropic);
 }
 
 double worst_gap(const Surface& a, const Surface& b) {

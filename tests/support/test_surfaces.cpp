@@ -121,4 +121,27 @@ nurbs::Surface perturbed(const nurbs::Surface& s, double amount, std::uint64_t s
   return nurbs::Surface(s.U(), s.V(), P, w);
 }
 
+SurfaceSamples sample_surface(const nurbs::Surface& s, std::size_t n, double sigma, std::uint64_t seed, Noise noise,
+                              double u_fraction) {
+  std::mt19937_64 rng(seed);
+  const nurbs::Domain d = s.domain();
+  std::uniform_real_distribution<double> u(d.u0, d.u0 + u_fraction * (d.u1 - d.u0)), v(d.v0, d.v1);
+  std::normal_distribution<double> gauss(0.0, sigma);
+  SurfaceSamples out;
+  for (std::size_t k = 0; k < n; ++k) {
+    const fitting::SurfaceParameter t{u(rng), v(rng)};
+    Point3 x = nurbs::evaluate(s, t.u, t.v);
+    if (sigma > 0.0) {
+      if (noise == Noise::AlongNormal) {
+        x += gauss(rng) * nurbs::unit_normal(s, t.u, t.v).n;
+      } else {
+        x += Vector3(gauss(rng), gauss(rng), gauss(rng));
+      }
+    }
+    out.points.push_back(x);
+    out.params.push_back(t);
+  }
+  return out;
+}
+
 }  // namespace probecomp::testing

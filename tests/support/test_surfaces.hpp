@@ -1,10 +1,12 @@
 #pragma once
-// Test geometry: random rational surfaces, a two-turn spiral sheet, and random points near a surface.
+// Test geometry: random rational surfaces, a two-turn spiral sheet, random points near a surface, and noisy
+// samples of a surface with their true parameters (for the fits).
 // Deterministic for a given seed.
 
 #include <cstdint>
 #include <vector>
 
+#include "probecomp/fitting/least_squares.hpp"
 #include "probecomp/nurbs/surface.hpp"
 
 namespace probecomp::testing {
@@ -37,5 +39,21 @@ struct RandomSurfaceSpec {
 // n points S(u,v) + t·n(u,v) with (u,v) uniform on the domain and t uniform in [-max_offset, max_offset].
 [[nodiscard]] std::vector<Point3> random_points_near(const nurbs::Surface& s, std::size_t n, double max_offset,
                                                      std::uint64_t seed);
+
+// Points sampled from a surface at known parameters: the data of a fit whose truth is the surface.
+struct SurfaceSamples {
+  std::vector<Point3> points;
+  std::vector<fitting::SurfaceParameter> params;
+};
+
+enum class Noise {
+  AlongNormal,  // one Gaussian draw of σ along the surface normal
+  Isotropic,    // a Gaussian draw of σ in each coordinate
+};
+
+// n points S(u,v) at uniform random parameters, u in the first `u_fraction` of the domain, moved by Gaussian noise
+// of standard deviation sigma (none drawn when sigma is 0); `params` are the true (u,v).
+[[nodiscard]] SurfaceSamples sample_surface(const nurbs::Surface& s, std::size_t n, double sigma, std::uint64_t seed,
+                                            Noise noise, double u_fraction = 1.0);
 
 }  // namespace probecomp::testing
