@@ -231,8 +231,11 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     const std::vector<fitting::SurfaceParameter>& params = ff.params;
     std::optional<fitting::AdaptiveFitResult>& fit = ff.fit;
     std::vector<double> weights(members.size(), 1.0);
+    // Each point's nearest other point, once per face for all its refits (the fit's noise estimate takes
+    // differences of neighbouring residuals).
+    const std::vector<std::uint32_t> nearest = fitting::nearest_neighbours(pts);
     auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at) {
-      fit = fitting::fit_surface(from, pts, at, weights, options.surface);
+      fit = fitting::fit_surface(from, pts, at, weights, options.surface, nearest);
       ++rep.fits;
       rep.rounds += fit->rounds;
     };

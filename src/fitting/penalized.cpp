@@ -293,6 +293,7 @@ struct Trial {
   double log10_smoothing = 0.0, lambda = 0.0;
   double rss = 0.0, trace = 0.0, cv_score = std::numeric_limits<double>::infinity();
   std::vector<double> Z;  // the band of the inverse (for tr H, the leverages and the variance factors)
+  Band L;                 // the Cholesky factor of AᵀWA + λG + εI (for the smoothing bias)
   std::vector<double> D;  // n × 3
 };
 
@@ -388,6 +389,7 @@ Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double 
   t.cv_score = leave_one_out(rows, t.D, Z, b) / data.weight_sum;
   t.ok = std::isfinite(t.rss) && std::isfinite(trace);
   t.Z = std::move(Z);
+  t.L = std::move(N);
   return t;
 }
 
@@ -497,6 +499,46 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
       result.variance_factor[k] = v;
     }
   });
+  // The smoothing bias E[D̂] − D = −λ (AᵀWA + λG)⁻¹ G D of the penalised fit, with an estimate of D for the
+  // unknown D (a plug-in estimate, as for kernel smoothers' bias: it sees the shape the fit found, which the
+  // penalty has shrunk already, so it reads low where the penalty dominates). Two more solves with the factor.
+  {
+    auto bias_of = [&](const std::vector<double>& D) {
+      std::vector<double> beta(static_cast<std::size_t>(n) * 3, 0.0);
+      for (int I = 0; I < n; ++I) {
+        for (int J = std::max(0, I - b); J <= I; ++J) {
+          const double g = G.at(I, J);
+          if (g == 0.0) continue;
+          for (int c = 0; c < 3; ++c) {
+            beta[3 * I + c] -= best.lambda * g * D[3 * J + c];
+            if (J != I) beta[3 * J + c] -= best.lambda * g * D[3 * I + c];
+          }
+        }
+      }
+      solve(best.L, beta);
+      return beta;
+    };
+    // Once more from D̂ less the first estimate (an estimate of D with the bias's first order removed): the
+    // first estimate alone reads a fifth to a third low on the free-form case's broad bulge (0.26 against 0.35 µm
+    // measured over 8 noise seeds, σ = 1.5 µm), where the smoothing shrinks the displacement most.
+    std::vector<double> corrected = bias_of(best.D);
+    for (std::size_t k = 0; k < corrected.size(); ++k) corrected[k] = best.D[k] - corrected[k];
+    const std::vector<double> beta = bias_of(corrected);
+    result.smoothing_bias.assign(n_points, Vector3::Zero());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_points, 1024), [&](const auto& range) {
+      RationalBasis rb;
+      const int m = (p + 1) * (q + 1);
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        detail::rational_basis(start, params[k].u, params[k].v, rb);
+        Vector3 e = Vector3::Zero();
+        for (int a = 0; a < m; ++a) {
+          const std::size_t I = static_cast<std::size_t>(order.index(rb.i0 + a / (q + 1), rb.j0 + a % (q + 1)));
+          e += rb.R[a] * Vector3(beta[3 * I], beta[3 * I + 1], beta[3 * I + 2]);
+        }
+        result.smoothing_bias[k] = e;
+      }
+    });
+  }
   result.status = PenalizedFitResult::Status::OK;
   return result;
 }

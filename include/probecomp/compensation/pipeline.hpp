@@ -52,7 +52,8 @@ struct CompensatedPoint {
   Vector3 normal = Vector3::Zero();  // outward unit normal used for the offset
   double deviation = 0.0;            // signed distance from the registered nominal, + outside the material, mm
   // Standard uncertainty (k = 1, mm) of the contact point along its normal: the fit's share σ̂·√(variance factor)
-  // (its hat-matrix diagonal and noise estimate) and the registration's share (registration::normal_variance times
+  // (its hat-matrix diagonal and noise estimate), its estimated bias (AdaptiveFitResult::misfit) and the
+  // registration's share (registration::normal_variance times
   // its residual variance) in quadrature. Where no fit stands behind the point (few points, an edge) the fit's
   // share is the registration's residual scale: the raw centre's whole scatter about the model. NaN where nothing
   // was computed.

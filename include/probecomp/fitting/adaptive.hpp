@@ -73,8 +73,9 @@ struct AdaptiveFitResult {
   // Per point: the fitted point's variance over σ² (PenalizedFitResult::variance_factor); w_k times it is the
   // point's leverage h_k.
   std::vector<double> variance_factor{};
-  // Per point: the estimated bias of the fit in the point's neighbourhood of spans, mm, never below noise_floor (see
-  // fit_surface: the larger of the residuals' mean less its variance and their significant mean-square excess).
+  // Per point: the estimated bias of the fit at the point, mm, never below noise_floor (see fit_surface: the
+  // largest of the residuals' mean over the point's neighbourhood of spans less its variance, their significant
+  // mean-square excess there, and the penalty's own bias at the point, PenalizedFitResult::smoothing_bias).
   std::vector<double> misfit{};
 
   [[nodiscard]] bool ok() const { return status == Status::OK; }

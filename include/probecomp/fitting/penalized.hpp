@@ -66,6 +66,9 @@ struct PenalizedFitResult {
   // the span's area (mm⁻²·mm² per mm²: its mean squared curvature), the roughness a spatially adaptive penalty
   // follows.
   std::vector<double> span_roughness{};
+  // Per point: the fit's smoothing bias there (the fitted point's expected error due to the penalty), estimated
+  // by −λ·R(u,v)ᵀ(AᵀWA + λG)⁻¹·G·D̃, mm, with D̃ = D̂ corrected once by the same estimate (see fit_penalized).
+  std::vector<Vector3> smoothing_bias{};
 
   [[nodiscard]] bool ok() const { return status == Status::OK; }
 };

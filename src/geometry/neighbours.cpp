@@ -1,0 +1,49 @@
+#include "probecomp/geometry/neighbours.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+#include "probecomp/geometry/point_tree.hpp"
+
+namespace probecomp::geometry {
+
+std::vector<std::uint32_t> nearest_others(std::span<const Point3> points, int count) {
+  const std::size_t n = points.size(), m = static_cast<std::size_t>(std::max(count, 0));
+  std::vector<std::uint32_t> out(n * m, 0);
+  if (n == 0 || m == 0) return out;
+  if (n == 1) return out;  // a point alone lists itself
+  PointCloud cloud{std::vector<Point3>(points.begin(), points.end())};
+  PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  const std::size_t wanted = std::min(m + 1, n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
+    std::vector<std::uint32_t> index(wanted);
+    std::vector<double> dist_sq(wanted);  // squared distances (nanoflann's L2 adaptor)
+    for (std::size_t pos = range.begin(); pos != range.end(); ++pos) {
+      const std::size_t k = tree.vAcc[pos];  // the tree's leaf order: neighbouring queries share cached nodes
+      nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(wanted);
+      knn.init(index.data(), dist_sq.data());
+      const double q[3] = {points[k].x(), points[k].y(), points[k].z()};
+      tree.findNeighbors(knn, q, nanoflann::SearchParams());
+      // The point itself is normally first; with duplicates at distance zero it may come later, or (ties) not at
+      // all: drop it where it is, else the farthest.
+      std::size_t skip = wanted - 1;
+      for (std::size_t i = 0; i < wanted; ++i) {
+        if (index[i] == k) {
+          skip = i;
+          break;
+        }
+      }
+      std::size_t j = 0;
+      for (std::size_t i = 0; i < wanted && j < m; ++i) {
+        if (i != skip) out[k * m + j++] = index[i];
+      }
+      for (; j < m; ++j) out[k * m + j] = out[k * m + j - 1];
+    }
+  });
+  return out;
+}
+
+}  // namespace probecomp::geometry

@@ -1,0 +1,36 @@
+// nearest_others against lists worked out by hand.
+
+#include "probecomp/geometry/neighbours.hpp"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace probecomp::geometry {
+namespace {
+
+TEST(NearestOthers, OnALineTheyAreTheClosestPointsOtherThanItself) {
+  // x = 0, 1, 3, 7: distances 1, 2, 4 apart.
+  const std::vector<Point3> p = {{0, 0, 0}, {1, 0, 0}, {3, 0, 0}, {7, 0, 0}};
+  const std::vector<std::uint32_t> n = nearest_others(p, 2);
+  const std::vector<std::uint32_t> expected = {1, 2, 0, 2, 1, 0, 2, 1};
+  EXPECT_EQ(n, expected);
+}
+
+TEST(NearestOthers, ADuplicateIsAnotherPointAndNeverThePointItself) {
+  const std::vector<Point3> p = {{0, 0, 0}, {0, 0, 0}, {5, 0, 0}};
+  const std::vector<std::uint32_t> n = nearest_others(p, 1);
+  EXPECT_EQ(n[0], 1u);
+  EXPECT_EQ(n[1], 0u);
+  EXPECT_TRUE(n[2] == 0u || n[2] == 1u);  // either duplicate, at the same distance
+}
+
+TEST(NearestOthers, FewerPointsThanAskedRepeatTheFarthest) {
+  const std::vector<Point3> p = {{0, 0, 0}, {1, 0, 0}};
+  EXPECT_EQ(nearest_others(p, 3), (std::vector<std::uint32_t>{1, 1, 1, 0, 0, 0}));
+  EXPECT_EQ(nearest_others(std::vector<Point3>{{2, 2, 2}}, 2), (std::vector<std::uint32_t>{0, 0}));
+  EXPECT_TRUE(nearest_others({}, 4).empty());
+}
+
+}  // namespace
+}  // namespace probecomp::geometry
