@@ -55,7 +55,7 @@ struct StudyArgs {
   std::string name, output_dir = "probecomp-study";
   studies::RegistrationStudyOptions registration;
   std::string metric = "point-to-plane", loss = "cauchy";
-  double noise = -1.0;  // mm; < 0: the study's own
+  std::vector<double> noise;  // mm; empty: the study's own; freeform: several sweep them
   std::uint64_t seed = 1;
 };
 // The studies `probecomp study` knows, in the order of the paper's sections.

@@ -139,6 +139,11 @@ std::string freeform_report(const studies::FreeformStudyResult& r) {
     << face.rounds << " refinement rounds, RMS residual " << fmt("%.2f", 1000 * face.rms) << " um, noise estimate "
     << fmt("%.2f", 1000 * face.noise_sigma) << " um; " << r.cad.count(compensation::PointStatus::Ok) << " of "
     << r.cad.points.size() << " points ok.\n"
+    << "Uncertainty u (k = 1) of the CAD-based points: mean " << fmt("%.2f", 1000 * r.mean_uncertainty)
+    << " um; the true error is within +-2u at " << fmt("%.1f", 100 * r.coverage_2u) << " % of the ok points ("
+    << fmt("%.1f", 100 * r.worst_region_coverage_2u) << " % in the worst of 4 x 4 regions).\n"
+    << "Fit: " << fmt("%.0f", face.effective_dof) << " effective parameters, smoothing 10^" << fmt("%.2f", face.log10_smoothing)
+    << ".\n"
     << "Timings: simulation " << fmt("%.2f", r.simulate_seconds) << " s, CAD-based compensation "
     << fmt("%.2f", r.cad_seconds) << " s, conventional " << fmt("%.2f", r.conventional_seconds) << " s.\n";
 

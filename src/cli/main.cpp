@@ -200,7 +200,8 @@ int main(int argc, char** argv) {
                     "Directory for NAME.json (summary) and NAME.csv (series); default probecomp-study");
   study->add_option("--noise", study_args.noise,
                     "registration, freeform: Gaussian noise sigma on each coordinate of the raw centres, mm "
-                    "(default: 0 and 0.0045)")
+                    "(default: 0 and 0.0045); freeform: a comma-separated list sweeps the levels, e.g. 0,0.0015,0.0045")
+      ->delimiter(',')
       ->check(CLI::NonNegativeNumber);
   study->add_option("--seed", study_args.seed, "Random seed (default 1)");
   study->add_option("--trials", study_args.registration.trials, "registration: random misalignments (default 30)")

@@ -1,6 +1,9 @@
 #include "probecomp/studies/freeform_study.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
 #include <random>
 
 namespace probecomp::studies {
@@ -28,6 +31,45 @@ FreeformStudyResult run_freeform_study(const FreeformStudyOptions& options) {
                          .probe_radius = c.probe_radius, .noise_sigma = c.noise_sigma, .seed = options.seed};
   static_cast<MethodComparison&>(out) =
       compare_methods(m, {.approach_normals = options.approach_normals, .compensate = options.compensate});
+
+  double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
+  for (const simulation::ProgrammedPoint& p : out.plan) {
+    x0 = std::min(x0, p.point.x());
+    x1 = std::max(x1, p.point.x());
+    y0 = std::min(y0, p.point.y());
+    y1 = std::max(y1, p.point.y());
+  }
+  constexpr int kRegions = 4;
+  std::array<int, kRegions * kRegions> inside{}, counted{};
+  int all_inside = 0, all_counted = 0;
+  double u_sum = 0.0;
+  for (std::size_t k = 0; k < out.plan.size(); ++k) {
+    const compensation::CompensatedPoint& p = out.cad.points[k];
+    if (p.status != compensation::PointStatus::Ok) {
+      ++out.flagged;
+      continue;
+    }
+    if (!std::isfinite(out.cad_error[k])) continue;
+    const Point3& x = out.plan[k].point;
+    const int a = std::clamp(static_cast<int>(kRegions * (x.x() - x0) / std::max(x1 - x0, 1e-12)), 0, kRegions - 1);
+    const int b = std::clamp(static_cast<int>(kRegions * (x.y() - y0) / std::max(y1 - y0, 1e-12)), 0, kRegions - 1);
+    const bool in = std::abs(out.cad_error[k]) <= 2.0 * p.uncertainty;
+    all_inside += in;
+    ++all_counted;
+    inside[static_cast<std::size_t>(a * kRegions + b)] += in;
+    ++counted[static_cast<std::size_t>(a * kRegions + b)];
+    u_sum += p.uncertainty;
+  }
+  if (all_counted > 0) {
+    out.mean_uncertainty = u_sum / all_counted;
+    out.coverage_2u = static_cast<double>(all_inside) / all_counted;
+    out.worst_region_coverage_2u = 1.0;
+    for (std::size_t g = 0; g < inside.size(); ++g) {
+      if (counted[g] > 0) {
+        out.worst_region_coverage_2u = std::min(out.worst_region_coverage_2u, static_cast<double>(inside[g]) / counted[g]);
+      }
+    }
+  }
   return out;
 }
 

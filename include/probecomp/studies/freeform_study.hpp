@@ -24,6 +24,12 @@ struct FreeformStudyOptions {
 struct FreeformStudyResult : MethodComparison {
   simulation::FreeformCase freeform;
   std::vector<simulation::ProgrammedPoint> plan;  // in measurement order
+  // The CAD method's per-point uncertainty u against the true errors (cad_error), over its trusted (ok) points:
+  // their mean u, mm, and the share whose |error| ≤ 2u over the panel and in the worst of a 4 × 4 grid of regions
+  // over it (by the programmed points' x and y). About 95 % is what a k = 1 uncertainty promises.
+  double mean_uncertainty = 0.0;
+  double coverage_2u = 0.0, worst_region_coverage_2u = 0.0;
+  int flagged = 0;  // the CAD method's rows not ok
 };
 
 [[nodiscard]] FreeformStudyResult run_freeform_study(const FreeformStudyOptions& options = {});
