@@ -125,12 +125,15 @@ std::vector<double> band_inverse(const Band& L) {
 // rᵀ·Z·r over the unknowns idx[0..m) (all within the band of each other), Z in band_inverse's layout: a basis
 // row's variance factor.
 double band_quadratic_form(const std::vector<double>& Z, int b, const int* idx, const double* r, int m) {
+  // Z is symmetric: the diagonal terms once, each off-diagonal pair twice.
   double v = 0.0;
   for (int a = 0; a < m; ++a) {
-    for (int c = 0; c < m; ++c) {
+    double row = 0.0;
+    for (int c = a + 1; c < m; ++c) {
       const int I = std::min(idx[a], idx[c]), J = std::max(idx[a], idx[c]);
-      v += r[a] * r[c] * Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
+      row += r[c] * Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
     }
+    v += r[a] * (2.0 * row + r[a] * Z[static_cast<std::size_t>(idx[a]) * (b + 1)]);
   }
   return v;
 }
@@ -297,51 +300,78 @@ struct Trial {
   std::vector<double> D;  // n × 3
 };
 
-// The points, their parameters and weights and the fit's basis, for the leave-one-out score.
-struct PointRows {
-  const Surface& s;
-  const Ordering& order;
-  std::span<const Point3> points;
-  std::span<const SurfaceParameter> params;
-  std::span<const double> weights;
-};
-
 // Points the cross-validation score is summed over at most.
 constexpr std::size_t kCvPoints = 16384;
+
+// The points the leave-one-out score is summed over, each with its basis row (the nonzero R_I and their unknowns)
+// and its offset from the start surface, y_k = x_k − S⁰(u_k, v_k): made once per fit, used by every trial λ.
+// Above kCvPoints points, every stride-th point (in input order, so the same points for every λ): each term is
+// exact for its point, so the sum over the sample estimates the whole sum without bias, at a bounded cost.
+struct CvRows {
+  int m = 0;                 // basis functions per row, (p + 1)(q + 1)
+  std::vector<int> idx;      // m per row
+  std::vector<double> R;     // m per row
+  std::vector<Vector3> y;    // one per row
+  std::vector<double> w;     // one per row
+};
+
+CvRows cv_rows(const Surface& s, const Ordering& order, std::span<const Point3> points,
+               std::span<const SurfaceParameter> params, std::span<const double> weights) {
+  const int p = s.p(), q = s.q();
+  const std::size_t n_points = points.size();
+  const std::size_t stride = std::max<std::size_t>(1, n_points / kCvPoints);
+  std::vector<std::size_t> chosen;
+  for (std::size_t k = 0; k < n_points; k += stride) {
+    if (weights.empty() || weights[k] != 0.0) chosen.push_back(k);
+  }
+  CvRows rows;
+  rows.m = (p + 1) * (q + 1);
+  const std::size_t m = static_cast<std::size_t>(rows.m);
+  rows.idx.resize(chosen.size() * m);
+  rows.R.resize(chosen.size() * m);
+  rows.y.resize(chosen.size());
+  rows.w.resize(chosen.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chosen.size(), 1024), [&](const auto& range) {
+    RationalBasis rb;
+    for (std::size_t r = range.begin(); r != range.end(); ++r) {
+      const std::size_t k = chosen[r];
+      detail::rational_basis(s, params[k].u, params[k].v, rb);
+      Vector3 S0 = Vector3::Zero();
+      for (std::size_t a = 0; a < m; ++a) {
+        const int i = rb.i0 + static_cast<int>(a) / (q + 1), j = rb.j0 + static_cast<int>(a) % (q + 1);
+        rows.idx[r * m + a] = order.index(i, j);
+        rows.R[r * m + a] = rb.R[a];
+        S0 += rb.R[a] * s.control_point(i, j);
+      }
+      rows.y[r] = points[k] - S0;
+      rows.w[r] = weights.empty() ? 1.0 : weights[k];
+    }
+  });
+  return rows;
+}
 
 // Leave-one-out cross-validation (Allen's PRESS): Σ w_k |r_k|² / (1 − h_k)², r_k the point's residual and h_k its
 // leverage. Unlike GCV, which replaces each h_k by their mean, it sees a point that alone holds a control point
 // (h_k near 1): with scattered points on a fine basis that is where an almost unpenalised fit swings between
 // the points, and GCV, blind to it, would choose such a fit for exact data.
-double leave_one_out(const PointRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b) {
-  const Surface& s = rows.s;
-  const int p = s.p(), q = s.q();
-  const std::size_t n_points = rows.points.size();
+double leave_one_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b) {
+  const std::size_t n_rows = rows.y.size(), m = static_cast<std::size_t>(rows.m);
   constexpr std::size_t kBlock = 4096;  // fixed blocks summed in order: the same sum for any thread count
-  const std::size_t blocks = (n_points + kBlock - 1) / kBlock;
-  // Above kCvPoints points, every stride-th point (in input order, so the same points for every λ): each term is
-  // exact for its point, so the sum over the sample estimates the whole sum without bias, at a bounded cost.
-  const std::size_t stride = std::max<std::size_t>(1, n_points / kCvPoints);
+  const std::size_t blocks = (n_rows + kBlock - 1) / kBlock;
   std::vector<double> part(blocks, 0.0);
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) {
-    RationalBasis rb;
-    int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
-    const int m = (p + 1) * (q + 1);
     double sum = 0.0;
-    for (std::size_t k = blk * kBlock; k < std::min(n_points, (blk + 1) * kBlock); ++k) {
-      const double w = rows.weights.empty() ? 1.0 : rows.weights[k];
-      if (w == 0.0 || k % stride != 0) continue;
-      detail::rational_basis(s, rows.params[k].u, rows.params[k].v, rb);
-      Vector3 fitted = Vector3::Zero();
-      for (int a = 0; a < m; ++a) {
-        const int i = rb.i0 + a / (q + 1), j = rb.j0 + a % (q + 1);
-        idx[a] = rows.order.index(i, j);
+    for (std::size_t r = blk * kBlock; r < std::min(n_rows, (blk + 1) * kBlock); ++r) {
+      const int* idx = &rows.idx[r * m];
+      const double* R = &rows.R[r * m];
+      Vector3 fitted = Vector3::Zero();  // the displacement's value at the point: S − S⁰
+      for (std::size_t a = 0; a < m; ++a) {
         const std::size_t I = static_cast<std::size_t>(idx[a]);
-        fitted += rb.R[a] * (s.control_point(i, j) + Vector3(D[3 * I], D[3 * I + 1], D[3 * I + 2]));
+        fitted += R[a] * Vector3(D[3 * I], D[3 * I + 1], D[3 * I + 2]);
       }
-      const double v = band_quadratic_form(Z, b, idx, rb.R, m);
-      const double one_minus_h = std::max(1.0 - w * v, 1e-6);
-      sum += w * (fitted - rows.points[k]).squaredNorm() / (one_minus_h * one_minus_h);
+      const double v = band_quadratic_form(Z, b, idx, R, rows.m);
+      const double one_minus_h = std::max(1.0 - rows.w[r] * v, 1e-6);
+      sum += rows.w[r] * (fitted - rows.y[r]).squaredNorm() / (one_minus_h * one_minus_h);
     }
     part[blk] = sum;
   });
@@ -351,7 +381,7 @@ double leave_one_out(const PointRows& rows, const std::vector<double>& D, const 
 }
 
 Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double ridge, double log10_smoothing,
-               const PointRows& rows) {
+               const CvRows& rows) {
   Trial t;
   t.log10_smoothing = log10_smoothing;
   t.lambda = std::pow(10.0, log10_smoothing) * scale_ratio;
@@ -418,7 +448,7 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   const double scale_ratio = data_trace / std::max(G.trace(), 1e-300);
   const double ridge = options.ridge * data_trace / n;
 
-  const PointRows rows{start, order, points, params, weights};
+  const CvRows rows = cv_rows(start, order, points, params, weights);
   auto run = [&](double t10) {
     ++result.evaluations;
     return evaluate(data, G, scale_ratio, ridge, t10, rows);
@@ -428,15 +458,19 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   if (options.log10_smoothing) {
     best = run(*options.log10_smoothing);
   } else {
-    // A scan in decades, then golden sections of the best decade's two neighbours.
-    for (double t10 = options.min_log10_smoothing; t10 <= options.max_log10_smoothing + 1e-9; t10 += options.scan_step) {
-      Trial t = run(t10);
-      if (t.ok && t.cv_score < best.cv_score) best = std::move(t);
-    }
-    const double best_t = best.ok ? best.log10_smoothing : options.max_log10_smoothing;
+    // A scan in decades, then golden sections of the best decade's two neighbours. A range no wider than two
+    // scan steps (a search near a known λ) is bracketed already: golden sections of it alone.
     constexpr double kGolden = 0.6180339887498949;
-    double lo = std::max(best_t - options.scan_step, options.min_log10_smoothing);
-    double hi = std::min(best_t + options.scan_step, options.max_log10_smoothing);
+    double lo = options.min_log10_smoothing, hi = options.max_log10_smoothing;
+    if (hi - lo > 2.0 * options.scan_step) {
+      for (double t10 = options.min_log10_smoothing; t10 <= options.max_log10_smoothing + 1e-9; t10 += options.scan_step) {
+        Trial t = run(t10);
+        if (t.ok && t.cv_score < best.cv_score) best = std::move(t);
+      }
+      const double best_t = best.ok ? best.log10_smoothing : options.max_log10_smoothing;
+      lo = std::max(best_t - options.scan_step, options.min_log10_smoothing);
+      hi = std::min(best_t + options.scan_step, options.max_log10_smoothing);
+    }
     double x1 = hi - kGolden * (hi - lo), x2 = lo + kGolden * (hi - lo);
     Trial t1 = run(x1), t2 = run(x2);
     for (int step = 0; step < options.golden_steps; ++step) {
