@@ -202,6 +202,7 @@ int main(int argc, char** argv) {
                     "registration, freeform: Gaussian noise sigma on each coordinate of the raw centres, mm "
                     "(default: 0 and 0.0045); freeform: a comma-separated list sweeps the levels, e.g. 0,0.0015,0.0045")
       ->delimiter(',')
+      ->allow_extra_args(false)  // one argument per --noise (the list is comma-separated), not all that follow
       ->check(CLI::NonNegativeNumber);
   study->add_option("--seed", study_args.seed, "Random seed (default 1)");
   study->add_option("--trials", study_args.registration.trials, "registration: random misalignments (default 30)")

@@ -149,8 +149,8 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       // kCorrectionBracket decades of the last (golden sections only: 8 fits, against 17 for the full search).
       PenalizedFitOptions near = fit_options;
       if (!options.fit.log10_smoothing) {
-        near.min_log10_smoothing = std::max(options.fit.min_log10_smoothing, fit.log10_smoothing - kCorrectionBracket);
-        near.max_log10_smoothing = std::min(options.fit.max_log10_smoothing, fit.log10_smoothing + kCorrectionBracket);
+        near.min_log10_smoothing = std::max(fit_options.min_log10_smoothing, fit.log10_smoothing - kCorrectionBracket);
+        near.max_log10_smoothing = std::min(fit_options.max_log10_smoothing, fit.log10_smoothing + kCorrectionBracket);
       }
       fit = fit_penalized(target, points, t, weights, near, span_weight);
     }
@@ -281,7 +281,9 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
           const double along = nn.status == nurbs::UnitNormal::Status::Degenerate ? fit.smoothing_bias[k].norm()
                                                                                  : std::abs(fit.smoothing_bias[k].dot(nn.n));
           const double r2 = result.residuals[k] * result.residuals[k];
-          const double own = std::abs(standardised[k]) > kOwnResidualSigmas * sigma
+          // (Not for a point left out: its residual is its own gross error, which the fit ignored.)
+          const bool in_fit = weights.empty() || weights[k] > 0.0;
+          const double own = in_fit && std::abs(standardised[k]) > kOwnResidualSigmas * sigma
                                  ? std::sqrt(std::max(0.0, r2 - sigma * sigma * std::max(1.0 - leverage[k], 0.0)))
                                  : 0.0;
           result.misfit[k] = std::max({bias[span[k]], along, own});

@@ -453,7 +453,7 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     ++result.evaluations;
     return evaluate(data, G, scale_ratio, ridge, t10, rows);
   };
-  // Each trial keeps its factor's band inverse, so the best one is used as it is, not evaluated again.
+  // Each trial keeps its factor and its band inverse, so the best one is used as it is, not evaluated again.
   Trial best;
   if (options.log10_smoothing) {
     best = run(*options.log10_smoothing);
@@ -533,9 +533,10 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
       result.variance_factor[k] = v;
     }
   });
-  // The smoothing bias E[D̂] − D = −λ (AᵀWA + λG)⁻¹ G D of the penalised fit, with an estimate of D for the
-  // unknown D (a plug-in estimate, as for kernel smoothers' bias: it sees the shape the fit found, which the
-  // penalty has shrunk already, so it reads low where the penalty dominates). Two more solves with the factor.
+  // The smoothing bias E[D̂] − D = −λ (AᵀWA + λG + εI)⁻¹ G D of the penalised fit (the whisker ε's own share
+  // left out: far below the data's), with an estimate of D for the unknown D (a plug-in estimate, as for kernel
+  // smoothers' bias: it sees the shape the fit found, which the penalty has shrunk already, so it reads low where
+  // the penalty dominates). Two more solves with the factor.
   {
     auto bias_of = [&](const std::vector<double>& D) {
       std::vector<double> beta(static_cast<std::size_t>(n) * 3, 0.0);

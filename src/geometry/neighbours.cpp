@@ -27,17 +27,21 @@ std::vector<std::uint32_t> nearest_others(std::span<const Point3> points, int co
       knn.init(index.data(), dist_sq.data());
       const double q[3] = {points[k].x(), points[k].y(), points[k].z()};
       tree.findNeighbors(knn, q, nanoflann::SearchParams());
+      // Fewer than asked only for a point with a non-finite coordinate: then the first slots alone are this
+      // query's.
+      const std::size_t found = std::max<std::size_t>(knn.size(), 1);
+      if (knn.size() == 0) index[0] = static_cast<std::uint32_t>(k);
       // The point itself is normally first; with duplicates at distance zero it may come later, or (ties) not at
       // all: drop it where it is, else the farthest.
-      std::size_t skip = wanted - 1;
-      for (std::size_t i = 0; i < wanted; ++i) {
+      std::size_t skip = found - 1;
+      for (std::size_t i = 0; i < found; ++i) {
         if (index[i] == k) {
           skip = i;
           break;
         }
       }
       std::size_t j = 0;
-      for (std::size_t i = 0; i < wanted && j < m; ++i) {
+      for (std::size_t i = 0; i < found && j < m; ++i) {
         if (i != skip) out[k * m + j++] = index[i];
       }
       for (; j < m; ++j) out[k * m + j] = out[k * m + j - 1];

@@ -40,7 +40,8 @@ FreeformStudyResult run_freeform_study(const FreeformStudyOptions& options) {
     y1 = std::max(y1, p.point.y());
   }
   constexpr int kRegions = 4;
-  std::array<int, kRegions * kRegions> inside{}, counted{};
+  std::array<int, kRegions * kRegions>& inside = out.region_covered;
+  std::array<int, kRegions * kRegions>& counted = out.region_ok;
   int all_inside = 0, all_counted = 0;
   double u_sum = 0.0;
   for (std::size_t k = 0; k < out.plan.size(); ++k) {

@@ -45,11 +45,11 @@ struct AdaptiveFitOptions {
   // at 4, 3.2 µm and none flagged at 2).
   double min_points_per_control_point = 2.0;  // refinement stops before the fit has fewer
   // ... unless the noise estimate is at the floor (noise-free data): then there is no noise to average and the
-  // fit may go as far as this, to follow a narrow feature (the free-form case without noise: largest error
-  // 1.9 µm when stopped at 4, 0.18 µm at 2). Knot lines run across the whole face, so a dent among scattered
-  // points needs more control points than its own area would: 3 000 random points without noise, largest error
-  // over 5 seeds 0.46–1.35 µm and none flagged at 1.25, against 8.9 µm and 2 rows of the dent flagged at 2 in
-  // one seed; the steep dent's 0.54 µm against 1.6 µm.
+  // fit may go as far as this, to follow a narrow feature (the free-form case without noise on its grid: largest
+  // error 1.9 µm when stopped at 4, 0.18 µm at 2 and at 1.25). Knot lines run across the whole face, so a dent
+  // among scattered points needs more control points than its own area would: 3 000 random points without
+  // noise, largest error over 5 seeds 0.33–1.35 µm and none flagged at 1.25, against 8.9 µm and 2 rows of the
+  // dent flagged at 2 in one seed; the steep dent's 0.54 µm against 1.6 µm.
   double min_points_per_control_point_noise_free = 1.25;
 };
 

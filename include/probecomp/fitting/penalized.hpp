@@ -35,7 +35,7 @@ struct PenalizedFitOptions {
   // range below.
   std::optional<double> log10_smoothing;
   // The search: a scan in steps of `scan_step` decades over [min, max], then a golden-section search between the
-  // best step's two neighbours. The score is smooth and has one minimum in practice, so the scan only brackets
+  // best step's two neighbours; a range no wider than two steps (a search near a known λ) by golden sections alone. The score is smooth and has one minimum in practice, so the scan only brackets
   // it. Relative λ of 1e-9 lets the fit follow noise-free data to a few hundredths of a micrometre; 1e3 is far
   // beyond where the energy dominates any data set (the fit is then S⁰ plus a linear displacement).
   double min_log10_smoothing = -9.0;

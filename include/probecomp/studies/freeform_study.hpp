@@ -2,6 +2,7 @@
 // The paper's free-form comparison (§7.3, Table 2) end to end: the built-in case (simulation/freeform_case.hpp)
 // run through the paper's simulation protocol (studies/comparison.hpp).
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -29,6 +30,8 @@ struct FreeformStudyResult : MethodComparison {
   // over it (by the programmed points' x and y). About 95 % is what a k = 1 uncertainty promises.
   double mean_uncertainty = 0.0;
   double coverage_2u = 0.0, worst_region_coverage_2u = 0.0;
+  // Per region (a · 4 + b, a along x): ok points, and those of them within ±2u.
+  std::array<int, 16> region_ok{}, region_covered{};
   int flagged = 0;  // the CAD method's rows not ok
 };
 
