@@ -12,6 +12,7 @@
 #include "probecomp/geometry/stopwatch.hpp"
 #include "probecomp/io/dmis.hpp"
 #include "probecomp/io/format.hpp"
+#include "probecomp/io/output_files.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/io/results.hpp"
 #include "probecomp/io/text.hpp"
@@ -66,20 +67,20 @@ compensation::CompensationResult run_pipeline(const Loaded& l, double r, compens
   return compensation::compensate(l.model, l.table.points, normals, o);
 }
 
-// The write step: the points (CSV or DMIS, by the extension), the report and the statistics.
+// The write step: the points (CSV or DMIS, by the extension), the report and the statistics, all or none (standard
+// output last, once every file is in place).
 void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation::CompensationResult& r) {
   const Stopwatch clock;
   const std::string text =
       !a.output.empty() && io::is_dmis(a.output) ? io::compensated_dmis(l.table, r, a.points) : io::compensated_csv(l.table, r);
-  if (!a.report.empty()) io::write_file_atomically(a.report, io::html_report(a.cad, a.points, r));
-  if (a.output.empty()) {
-    std::cout << text;
-  } else {
-    io::write_file_atomically(a.output, text);
-  }
+  io::OutputFiles files;
+  if (!a.report.empty()) files.add(a.report, io::html_report(a.cad, a.points, r));
+  if (!a.output.empty()) files.add(a.output, text);
   if (!a.json.empty()) {
-    io::write_file_atomically(a.json, io::statistics_json(r, {.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()}));
+    files.add(a.json, io::statistics_json(r, {.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()}));
   }
+  files.commit();
+  if (a.output.empty()) std::cout << text;
 }
 
 void print_summary_row(std::ostream& out, const char* name, const studies::ErrorSummary& s) {
@@ -91,6 +92,7 @@ void print_summary_row(std::ostream& out, const char* name, const studies::Error
 }  // namespace
 
 int run_compensate(const CompensateArgs& a) {
+  io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}, {"--report", a.report}}, {{"--cad", a.cad}, {"--points", a.points}});
   const Loaded l = load(a.cad, a.points, a.probe_radius);
   const compensation::Method method = a.method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
   const compensation::CompensationResult r = run_pipeline(l, a.probe_radius, method, a.quiet);
@@ -102,6 +104,7 @@ int run_fit(const FitArgs& a) {
   if (!has_extension(a.output, {".igs", ".iges", ".stp", ".step"})) {
     throw std::invalid_argument("--output must end in .igs, .iges, .stp or .step (the fitted surfaces as NURBS)");
   }
+  io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}}, {{"--cad", a.cad}, {"--points", a.points}});
   const Loaded l = load(a.cad, a.points, a.probe_radius);
   const compensation::CompensationResult r = run_pipeline(l, a.probe_radius, compensation::Method::Cad, a.quiet);
   const std::vector<nurbs::Surface> surfaces = compensation::fitted_part_surfaces(r, a.probe_radius);
@@ -109,10 +112,12 @@ int run_fit(const FitArgs& a) {
     throw FitError("no face holds enough points for a fit, so there is no measured surface to write");
   }
   const Stopwatch clock;
-  cad::write_surfaces(a.output, surfaces);
+  io::OutputFiles files;
+  files.add(a.output, [&](const std::filesystem::path& temporary) { cad::write_surfaces(temporary, surfaces); });
   if (!a.json.empty()) {
-    io::write_file_atomically(a.json, io::statistics_json(r, {.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()}));
+    files.add(a.json, io::statistics_json(r, {.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()}));
   }
+  files.commit();
   return 0;
 }
 
@@ -161,12 +166,16 @@ int run_demo(const DemoArgs& a) {
   // The inputs and both outputs, so that `probecomp compensate` can be run on them by hand.
   std::filesystem::create_directories(a.output_dir);
   const std::filesystem::path dir(a.output_dir);
-  cad::write_surfaces(dir / "nominal.igs", {c.nominal.faces.front().surface});
+  io::OutputFiles files;
+  files.add(dir / "nominal.igs", [&](const std::filesystem::path& temporary) {
+    cad::write_surfaces(temporary, {c.nominal.faces.front().surface});
+  });
   io::PointTable table;  // raw.csv's layout: no carried columns, so compensated_csv reads no row fields
   table.columns = {"x", "y", "z", "i", "j", "k"};
-  io::write_file_atomically(dir / "raw.csv", raw_points_csv(r.touches, r.plan, false));
-  io::write_file_atomically(dir / "compensated_cad.csv", io::compensated_csv(table, r.cad));
-  io::write_file_atomically(dir / "compensated_conventional.csv", io::compensated_csv(table, r.conventional));
+  files.add(dir / "raw.csv", raw_points_csv(r.touches, r.plan, false));
+  files.add(dir / "compensated_cad.csv", io::compensated_csv(table, r.cad));
+  files.add(dir / "compensated_conventional.csv", io::compensated_csv(table, r.conventional));
+  files.commit();
   t << "\nWrote " << (dir / "nominal.igs").string() << ", raw.csv, compensated_cad.csv and compensated_conventional.csv\n"
     << "in " << dir.string() << "; rerun with:\n  probecomp compensate --cad " << (dir / "nominal.igs").string()
     << " --points " << (dir / "raw.csv").string() << " --probe-radius " << c.probe_radius << "\n"

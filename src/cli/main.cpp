@@ -18,6 +18,7 @@
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "probecomp/io/format.hpp"
+#include "probecomp/io/output_files.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/error.hpp"
 #include "probecomp/version.hpp"
@@ -94,6 +95,7 @@ int run_info(const std::string& part, bool json) {
 }
 
 int run_project(const std::string& part, const std::string& points_file, const std::string& output) {
+  io::check_outputs_spare_inputs({{"--output", output}}, {{"PART", part}, {"--points", points_file}});
   const io::PointTable table = io::read_point_csv(points_file);
   const cad::Model model = cad::read_model(part);
   const cad::ModelLocator locator(model);
@@ -126,6 +128,7 @@ int run_project(const std::string& part, const std::string& points_file, const s
 }
 
 int run_plan(const std::string& part, double spacing, const std::string& face_list, const std::string& output) {
+  io::check_outputs_spare_inputs({{"--output", output}}, {{"PART", part}});
   const bool dmis = output.size() > 4 && (output.ends_with(".dmi") || output.ends_with(".DMI"));
   const std::vector<int> faces = cli::parse_face_list(face_list);
   const cad::Model model = cad::read_model(part);

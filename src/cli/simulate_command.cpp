@@ -14,6 +14,7 @@
 #include "cli/commands.hpp"
 #include "probecomp/io/format.hpp"
 #include "probecomp/io/dmis.hpp"
+#include "probecomp/io/output_files.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/simulation/measure.hpp"
 
@@ -107,6 +108,13 @@ int run_simulate(const SimulateArgs& a) {
   for (const std::string& spec : a.deform) add_deformation(spec, deformation);
   const geometry::RigidTransform placement =
       a.misalign.empty() ? geometry::RigidTransform::Identity() : parse_misalignment(a.misalign);
+  {
+    const std::filesystem::path dir(a.output_dir);
+    io::check_outputs_spare_inputs(
+        {{"--output-dir's actual.igs", dir / "actual.igs"}, {"--output-dir's truth.csv", dir / "truth.csv"},
+         {"--output-dir's raw.csv", dir / "raw.csv"}},
+        {{"--cad", a.cad}, {"--plan", a.plan}});
+  }
   const cad::Model nominal = cad::read_model(a.cad);
   const std::vector<simulation::ProgrammedPoint> plan = programmed_points(a, nominal);
 
@@ -121,22 +129,16 @@ int run_simulate(const SimulateArgs& a) {
   }
   if (touched == 0) throw std::invalid_argument("no programmed point touches the actual part (misalignment too large?)");
 
-  // Every file is made in full before the first is written; IGES goes first, since its writer is the one that
-  // can still fail, and a failure leaves no file of this run behind.
+  // All three files or none (io/output_files.hpp).
   const std::filesystem::path dir(a.output_dir);
   std::filesystem::create_directories(dir);
   std::vector<nurbs::Surface> surfaces;
   for (const cad::Face& f : actual.faces) surfaces.push_back(f.surface);
-  const std::string raw = raw_points_csv(touches, plan, true), truth = truth_csv(touches);
-  cad::write_surfaces(dir / "actual.igs", surfaces);
-  try {
-    io::write_file_atomically(dir / "truth.csv", truth);
-    io::write_file_atomically(dir / "raw.csv", raw);
-  } catch (...) {
-    std::filesystem::remove(dir / "actual.igs");
-    std::filesystem::remove(dir / "truth.csv");
-    throw;
-  }
+  io::OutputFiles files;
+  files.add(dir / "actual.igs", [&](const std::filesystem::path& temporary) { cad::write_surfaces(temporary, surfaces); });
+  files.add(dir / "truth.csv", truth_csv(touches));
+  files.add(dir / "raw.csv", raw_points_csv(touches, plan, true));
+  files.commit();
   std::cout << "probecomp simulate: " << plan.size() << " programmed points, " << touched << " touched (" << edge
             << " on a face edge), " << plan.size() - static_cast<std::size_t>(touched) << " missed; probe radius "
             << a.probe_radius << " mm, noise sigma " << a.noise << " mm, seed " << a.seed << ".\n"

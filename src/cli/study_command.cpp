@@ -11,6 +11,7 @@
 #include "cli/commands.hpp"
 #include "probecomp/geometry/stopwatch.hpp"
 #include "probecomp/io/format.hpp"
+#include "probecomp/io/output_files.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/studies/analytic_cylinder.hpp"
 #include "probecomp/studies/cylinder_study.hpp"
@@ -28,8 +29,10 @@ namespace {
 void write_study_files(const std::string& dir, const std::string& name, const std::string& csv, const std::string& json) {
   if (dir.empty()) return;
   std::filesystem::create_directories(dir);
-  io::write_file_atomically(std::filesystem::path(dir) / (name + ".csv"), csv);
-  io::write_file_atomically(std::filesystem::path(dir) / (name + ".json"), json);
+  io::OutputFiles files;
+  files.add(std::filesystem::path(dir) / (name + ".csv"), csv);
+  files.add(std::filesystem::path(dir) / (name + ".json"), json);
+  files.commit();
   std::cout << "Wrote " << (std::filesystem::path(dir) / (name + ".csv")).string() << " (the series) and " << name
             << ".json (the summary).\n";
 }

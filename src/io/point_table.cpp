@@ -1,5 +1,7 @@
 #include "probecomp/io/point_table.hpp"
 
+#include "probecomp/io/output_files.hpp"
+
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -7,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "probecomp/io/output_files.hpp"
 #include "probecomp/io/text.hpp"
 
 namespace probecomp::io {
@@ -94,24 +97,9 @@ PointTable read_point_csv(const std::filesystem::path& path) {
 }
 
 void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
-  std::filesystem::path tmp = path;
-  tmp += ".partial";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    out.flush();
-    if (!out) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      throw InputError(path.string() + ": cannot be written");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw InputError(path.string() + ": cannot be written (" + ec.message() + ")");
-  }
+  OutputFiles file;
+  file.add(path, text);
+  file.commit();
 }
 
 }  // namespace probecomp::io

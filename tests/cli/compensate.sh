@@ -67,4 +67,20 @@ check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/far.csv' --probe-r
 check "[ \$(status_of '$P' compensate --cad '$W/missing.igs' --points '$W/demo/raw.csv' --probe-radius 1) -eq 4 ]" "exit 4: CAD file"
 printf 'x,y,z\n10,10,1\n20,10,1\n' >"$W/two.csv"
 check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/two.csv' --probe-radius 1) -eq 5 ]" "exit 5: registration"
+
+# A measurement is never overwritten (issue 20, item 10): an output naming an input, by its own path, another
+# path or a link, is refused before anything runs, and the input is unchanged byte for byte.
+cp "$W/demo/raw.csv" "$W/keep.csv"; cp "$W/demo/raw.csv" "$W/keep.orig"; ln -sf keep.csv "$W/keep_link.csv"
+expect_error "is the --points file" "" "$P" compensate --cad "$N" --points "$W/keep.csv" --probe-radius 1 --output "$W/keep.csv"
+expect_error "is the --points file" "" "$P" compensate --cad "$N" --points "$W/keep.csv" --probe-radius 1 --output "$W/./keep.csv"
+expect_error "is the --points file" "" "$P" compensate --cad "$N" --points "$W/keep.csv" --probe-radius 1 --output "$W/keep_link.csv"
+expect_error "is the --points file" "" "$P" compensate --cad "$N" --points "$W/keep.csv" --probe-radius 1 --json "$W/keep.csv"
+expect_error "is the --cad file" "" "$P" fit --cad "$N" --points "$W/keep.csv" --probe-radius 1 --output "$N"
+expect_error "name the same file" "$W/same.csv" "$P" compensate --cad "$N" --points "$W/keep.csv" --probe-radius 1 --output "$W/same.csv" --json "$W/same.csv"
+expect_error "is the --points file" "" "$P" project --cad "$N" --points "$W/keep.csv" --output "$W/keep.csv"
+check "cmp -s '$W/keep.csv' '$W/keep.orig'" "the measurement is unchanged"
+# All outputs or none: a --json that cannot be written leaves neither the CSV nor the report behind.
+expect_error "cannot be written" "$W/late.csv" "$P" compensate --cad "$N" --points "$W/keep.csv" --probe-radius 1 \
+  --output "$W/late.csv" --report "$W/late.html" --json "$W/no_such_dir/late.json" --quiet
+check "[ ! -e '$W/late.html' ] && [ ! -e '$W/late.partial.html' ]" "no report left behind when the JSON fails"
 exit $fail

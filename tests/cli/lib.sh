@@ -1,6 +1,6 @@
 # Sourced by the CLI test scripts; needs W (work directory) and fail (0 or 1) set by the caller.
 # expect_error TEXT_IN_MESSAGE OUTPUT_FILE command...: the command fails with one line on standard error that
-# contains TEXT, and leaves no OUTPUT_FILE (nor OUTPUT_FILE.partial) behind.
+# contains TEXT, and leaves no OUTPUT_FILE (nor its temporary, OUTPUT.partial.EXT) behind.
 expect_error() {
   text=$1; out=$2; shift 2
   "$@" >"$W/stdout" 2>"$W/stderr"; rc=$?
@@ -8,5 +8,7 @@ expect_error() {
   if [ $rc -eq 0 ]; then echo "FAIL (exit 0): $*"; fail=1; fi
   if [ "$lines" -ne 1 ]; then echo "FAIL ($lines lines on stderr): $*"; cat "$W/stderr"; fail=1; fi
   if ! grep -q -- "$text" "$W/stderr"; then echo "FAIL (no '$text' in message): $*"; cat "$W/stderr"; fail=1; fi
-  if [ -n "$out" ] && ls "$out"* >/dev/null 2>&1; then echo "FAIL (output left behind): $*"; fail=1; fi
+  if [ -n "$out" ] && { ls "$out"* >/dev/null 2>&1 || ls "${out%.*}.partial"* >/dev/null 2>&1; }; then
+    echo "FAIL (output left behind): $*"; fail=1
+  fi
 }
