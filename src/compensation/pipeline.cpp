@@ -1,5 +1,6 @@
 #include "probecomp/compensation/pipeline.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -84,6 +85,44 @@ void check_points_near(const cad::ModelLocator& locator, std::span<const Point3>
     throw InputError("the points are nowhere near the model: their median distance from it is " + mm(median) +
                                 " mm, more than " + mm(limit) + " mm (" + mm(100 * fraction) +
                                 " % of its size); check the CAD file, the frame and the units");
+  }
+}
+
+// Points identical to within this (mm) are one position: far below any CMM's resolution, far above rounding.
+constexpr double kSamePosition = 1e-9;
+// Points whose spread across their main direction is below this fraction of the spread along it lie on a line.
+// A scan line across a curved face bends by far more (the free-form panel's shallowest line: 1e-3 of its length).
+constexpr double kLineRatio = 1e-6;
+
+// Refuses a point set that cannot fix the part (issue 20): every point at one position (a probe that did not
+// move, a file of repeated rows), or all on one line (about which nothing fixes the part's rotation, and across
+// which no surface is measured). Principal spreads from the points' covariance.
+void check_point_spread(std::span<const Point3> raw) {
+  Point3 centre = Point3::Zero();
+  std::size_t n = 0;
+  for (const Point3& p : raw) {
+    if (!p.allFinite()) continue;
+    centre += p;
+    ++n;
+  }
+  if (n == 0) throw InputError("no finite points to compensate");
+  centre /= static_cast<double>(n);
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Point3& p : raw) {
+    if (p.allFinite()) covariance += (p - centre) * (p - centre).transpose();
+  }
+  covariance /= static_cast<double>(n);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariance);
+  const Eigen::Vector3d spread = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();  // ascending
+  if (spread[2] <= kSamePosition) {
+    throw InputError("all " + std::to_string(n) + " points are at one position (" + mm(centre.x()) + ", " +
+                     mm(centre.y()) + ", " + mm(centre.z()) +
+                     "): they fix neither the part's position nor any surface");
+  }
+  if (spread[1] <= std::max(kLineRatio * spread[2], kSamePosition)) {
+    throw InputError("the " + std::to_string(n) + " points lie on one line (spread " + mm(spread[1]) +
+                     " mm across it, " + mm(spread[2]) +
+                     " mm along it): they cannot fix the part's rotation about that line nor measure a surface");
   }
 }
 
@@ -457,6 +496,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
         "the conventional method needs each point's approach normal (i,j,k) and the points have none; the CAD-based "
         "method does not need them");
   }
+  check_point_spread(raw);
   auto step = [&](const std::string& name, double fraction) {
     if (options.progress) options.progress(name, fraction);
   };

@@ -45,7 +45,7 @@ check "'$P' info '$W/actual.igs' | grep -q 'total: 1 faces'" "fit wrote one NURB
 N="$W/demo/nominal.igs"
 printf 'x,y,z\n1,2,3\n4,nan,6\n' >"$W/nan.csv"
 printf 'x,y,z\n' >"$W/empty.csv"
-printf 'x,y,z\n1000,1000,1000\n1001,1000,1000\n1002,1000,1000\n' >"$W/far.csv"
+printf 'x,y,z\n1000,1000,1000\n1001,1000,1000\n1000,1001,1000\n' >"$W/far.csv"
 cut -d, -f1-3 "$W/demo/raw.csv" >"$W/no_ijk.csv"
 printf 'ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((%s),%s);\nFILE_NAME(%s,%s,(%s),(%s),%s,%s,%s);\nFILE_SCHEMA((%s));\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT(%s,(0.,0.,0.));\nENDSEC;\nEND-ISO-10303-21;\n' \
   "''" "'2;1'" "'p.stp'" "''" "''" "''" "''" "''" "''" "'CONFIG_CONTROL_DESIGN'" "''" >"$W/no_surfaces.stp"
@@ -65,8 +65,16 @@ check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/demo/raw.csv' --pr
 check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/nan.csv' --probe-radius 1) -eq 3 ]" "exit 3: bad points"
 check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/far.csv' --probe-radius 1) -eq 3 ]" "exit 3: points nowhere near"
 check "[ \$(status_of '$P' compensate --cad '$W/missing.igs' --points '$W/demo/raw.csv' --probe-radius 1) -eq 4 ]" "exit 4: CAD file"
-printf 'x,y,z\n10,10,1\n20,10,1\n' >"$W/two.csv"
-check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/two.csv' --probe-radius 1) -eq 5 ]" "exit 5: registration"
+printf 'x,y,z\n10,10,1\n20,10,1\n10,20,1\n' >"$W/three.csv"
+check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/three.csv' --probe-radius 1) -eq 5 ]" "exit 5: registration"
+
+# Degenerate point sets are refused with the reason (issue 20, item 10): 500 identical points, 200 on a line
+# across the panel. (Before: the identical points came back "ok" with u = 0.1 um.)
+awk 'BEGIN { print "x,y,z"; for (i = 0; i < 500; i++) print "10,5,3.2" }' >"$W/identical.csv"
+awk 'BEGIN { print "x,y,z"; for (i = 0; i < 200; i++) printf "%.3f,%.3f,3\n", -40 + 0.4 * i, 0.1 * i - 10 }' >"$W/line.csv"
+expect_error "all 500 points are at one position" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/identical.csv" --probe-radius 1 --output "$W/o.csv"
+expect_error "lie on one line" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/line.csv" --probe-radius 1 --output "$W/o.csv"
+check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/identical.csv' --probe-radius 1) -eq 3 ]" "exit 3: identical points"
 
 # A measurement is never overwritten (issue 20, item 10): an output naming an input, by its own path, another
 # path or a link, is refused before anything runs, and the input is unchanged byte for byte.

@@ -158,11 +158,41 @@ TEST(Pipeline, TheStepsComposeToCompensate) {
 
 TEST(Pipeline, RegistrationThatCannotRunIsARegistrationError) {
   const simulation::FreeformCase c = simulation::paper_freeform_case();
-  // Two points cannot fix six motions.
-  const std::vector<Point3> raw{Point3(10, 10, 1), Point3(20, 10, 1)};
+  // Three points cannot fix six motions.
+  const std::vector<Point3> raw{Point3(10, 10, 1), Point3(20, 10, 1), Point3(10, 20, 1)};
   compensation::CompensateOptions o;
   o.probe_radius = 1.0;
   EXPECT_THROW((void)compensation::compensate(c.nominal, raw, std::nullopt, o), RegistrationError);
+}
+
+// Point sets that fix nothing are refused with the reason, before registration (issue 20): identical points
+// (before: 500 of them came back "ok" with u = 0.1 µm) and points on one line (two points, a straight scan).
+TEST(Pipeline, IdenticalOrCollinearPointsAreRefusedWithTheReason) {
+  const simulation::FreeformCase c = simulation::paper_freeform_case();
+  compensation::CompensateOptions o;
+  o.probe_radius = 1.0;
+  auto message = [&](const std::vector<Point3>& raw) -> std::string {
+    try {
+      (void)compensation::compensate(c.nominal, raw, std::nullopt, o);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "no InputError";
+  };
+  EXPECT_NE(message(std::vector<Point3>(500, Point3(10, 5, 3.2))).find("all 500 points are at one position"),
+            std::string::npos);
+  // Identical to within 1e-10 mm is the same position.
+  std::vector<Point3> nearly(50, Point3(10, 5, 3.2));
+  for (std::size_t k = 0; k < nearly.size(); ++k) nearly[k].x() += 1e-10 * static_cast<double>(k % 2);
+  EXPECT_NE(message(nearly).find("at one position"), std::string::npos);
+  std::vector<Point3> line;
+  for (int k = 0; k < 200; ++k) line.emplace_back(-40.0 + 0.4 * k, 0.1 * k - 10.0, 3.0);
+  EXPECT_NE(message(line).find("lie on one line"), std::string::npos) << message(line);
+  EXPECT_NE(message({Point3(10, 10, 1), Point3(20, 10, 1)}).find("lie on one line"), std::string::npos);
+  // A non-finite row does not hide that the rest are one point.
+  std::vector<Point3> with_nan(20, Point3(1, 2, 3));
+  with_nan.push_back(Point3(std::nan(""), 0, 0));
+  EXPECT_NE(message(with_nan).find("all 20 points"), std::string::npos) << message(with_nan);
 }
 
 TEST(Pipeline, ConventionalMethodWithoutApproachNormalsSaysWhy) {
