@@ -100,16 +100,9 @@ int run_project(const std::string& part, const std::string& points_file, const s
   const cad::Model model = cad::read_model(part);
   const cad::ModelLocator locator(model);
   const std::vector<cad::ModelPoint> found = locator.closest_points(table.points);
-  const std::vector<int> carried = table.carried_columns();
   std::ostringstream out;
   const std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "distance", "face", "u", "v", "status"};
-  out << "x,y,z,nx,ny,nz,distance,face,u,v,status";
-  for (int c : carried) {
-    // A carried column named like one of ours is renamed so that every header name stays unique.
-    const std::string& name = table.columns[static_cast<std::size_t>(c)];
-    out << ',' << (std::find(ours.begin(), ours.end(), name) != ours.end() ? "input_" + name : name);
-  }
-  out << '\n';
+  out << "x,y,z,nx,ny,nz,distance,face,u,v,status" << table.carried_header(ours) << '\n';
   for (std::size_t k = 0; k < found.size(); ++k) {
     const cad::ModelPoint& m = found[k];
     if (m.ok()) {
@@ -120,7 +113,7 @@ int run_project(const std::string& part, const std::string& points_file, const s
       // Never dropped: the row is there, empty, with the reason.
       out << ",,,,,,,,,," << nurbs::to_string(m.status);
     }
-    for (int c : carried) out << ',' << table.rows[k][static_cast<std::size_t>(c)];
+    out << table.carried_fields(k);
     out << '\n';
   }
   emit(output, out.str());

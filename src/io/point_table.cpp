@@ -1,7 +1,5 @@
 #include "probecomp/io/point_table.hpp"
 
-#include "probecomp/io/output_files.hpp"
-
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -16,13 +14,54 @@ namespace probecomp::io {
 
 namespace {
 
-std::vector<std::string> split(const std::string& line) {
+// Fields of one line, split at `separator` outside double quotes (RFC 4180: a quoted field may hold the separator,
+// and "" inside it is one quote), each with surrounding blanks and its quotes removed. Throws on an unclosed quote.
+std::vector<std::string> split(const std::string& line, char separator, const std::string& where) {
   std::vector<std::string> out;
   std::string field;
-  std::istringstream in(line);
-  while (std::getline(in, field, ',')) out.push_back(trim(field));
-  if (!line.empty() && line.back() == ',') out.emplace_back();
+  bool quoted = false, was_quoted = false;
+  for (std::size_t k = 0; k < line.size(); ++k) {
+    const char c = line[k];
+    if (quoted) {
+      if (c == '"' && k + 1 < line.size() && line[k + 1] == '"') {
+        field += '"';
+        ++k;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        field += c;
+      }
+    } else if (c == '"' && trim(field).empty()) {
+      quoted = was_quoted = true;
+      field.clear();
+    } else if (c == separator) {
+      out.push_back(was_quoted ? field : trim(field));
+      field.clear();
+      was_quoted = false;
+    } else if (!(was_quoted && (c == ' ' || c == '\t'))) {
+      field += c;
+    }
+  }
+  if (quoted) throw InputError(where + "a quote is not closed");
+  out.push_back(was_quoted ? field : trim(field));
   return out;
+}
+
+// The separator other software writes: the one of ',', ';' and tab that the header (outside quotes) holds most of.
+// ';' and tab come from spreadsheets set to a decimal comma.
+char detect_separator(const std::string& header) {
+  int comma = 0, semicolon = 0, tab = 0;
+  bool quoted = false;
+  for (char c : header) {
+    if (c == '"') quoted = !quoted;
+    if (quoted) continue;
+    comma += c == ',';
+    semicolon += c == ';';
+    tab += c == '\t';
+  }
+  if (semicolon > comma && semicolon >= tab) return ';';
+  if (tab > comma && tab > semicolon) return '\t';
+  return ',';
 }
 
 }  // namespace
@@ -36,6 +75,21 @@ std::vector<int> PointTable::carried_columns() const {
   return out;
 }
 
+std::string PointTable::carried_header(const std::vector<std::string>& ours) const {
+  std::string out;
+  for (int c : carried_columns()) {
+    const std::string& name = columns[static_cast<std::size_t>(c)];
+    out += ',' + csv_field(std::find(ours.begin(), ours.end(), name) != ours.end() ? "input_" + name : name);
+  }
+  return out;
+}
+
+std::string PointTable::carried_fields(std::size_t k) const {
+  std::string out;
+  for (int c : carried_columns()) out += ',' + csv_field(rows[k][static_cast<std::size_t>(c)]);
+  return out;
+}
+
 PointTable read_point_csv(const std::filesystem::path& path) {
   const std::string name = path.string();
   std::ifstream in(path);
@@ -46,12 +100,16 @@ PointTable read_point_csv(const std::filesystem::path& path) {
   int ix = -1, iy = -1, iz = -1, ii = -1, ij = -1, ik = -1;
   bool have_header = false;
   std::vector<Vector3> normals;
+  char separator = ',';
   while (std::getline(in, line)) {
     ++number;
-    const std::string text = trim(line);
+    // A UTF-8 byte-order mark, as spreadsheet programs write, is not part of the first column's name.
+    if (number == 1 && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);
+    const std::string text = trim(line);  // and CRLF's CR
     if (text.empty() || text[0] == '#') continue;
-    std::vector<std::string> fields = split(text);
     const std::string where = name + ":" + std::to_string(number) + ": ";
+    if (!have_header) separator = detect_separator(text);
+    std::vector<std::string> fields = split(text, separator, where);
     if (!have_header) {
       t.columns = fields;
       for (int c = 0; c < static_cast<int>(fields.size()); ++c) {
@@ -72,7 +130,11 @@ PointTable read_point_csv(const std::filesystem::path& path) {
       throw InputError(where + "expected " + std::to_string(t.columns.size()) + " fields, found " + std::to_string(fields.size()));
     }
     auto number_at = [&](int c) {
-      const std::string& f = fields[static_cast<std::size_t>(c)];
+      std::string f = fields[static_cast<std::size_t>(c)];
+      // With ';' or tab between fields, a decimal comma (one, and no point) is a decimal point.
+      if (separator != ',' && std::count(f.begin(), f.end(), ',') == 1 && f.find('.') == std::string::npos) {
+        f[f.find(',')] = '.';
+      }
       double value = 0.0;
       const auto [end, ec] = std::from_chars(f.data(), f.data() + f.size(), value);
       if (ec != std::errc() || end != f.data() + f.size() || f.empty()) {

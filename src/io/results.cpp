@@ -40,15 +40,9 @@ std::string row_label(const PointTable& t, std::size_t k) {
 }  // namespace
 
 std::string compensated_csv(const PointTable& t, const compensation::CompensationResult& r) {
-  const std::vector<int> carried = t.carried_columns();
   const std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "u", "face", "status"};
   std::ostringstream out;
-  out << "x,y,z,nx,ny,nz,deviation,u,face,status";
-  for (int c : carried) {
-    const std::string& name = t.columns[static_cast<std::size_t>(c)];
-    out << ',' << (std::find(ours.begin(), ours.end(), name) != ours.end() ? "input_" + name : name);
-  }
-  out << '\n';
+  out << "x,y,z,nx,ny,nz,deviation,u,face,status" << t.carried_header(ours) << '\n';
   for (std::size_t k = 0; k < r.points.size(); ++k) {
     const compensation::CompensatedPoint& p = r.points[k];
     if (p.computed()) {
@@ -60,7 +54,7 @@ std::string compensated_csv(const PointTable& t, const compensation::Compensatio
       out << ",,,,,,,," << (p.face >= 0 ? std::to_string(p.face) : "") << ',';
     }
     out << compensation::to_string(p.status);
-    for (int c : carried) out << ',' << t.rows[k][static_cast<std::size_t>(c)];
+    out << t.carried_fields(k);
     out << '\n';
   }
   return out.str();

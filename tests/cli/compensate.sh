@@ -68,6 +68,16 @@ check "[ \$(status_of '$P' compensate --cad '$W/missing.igs' --points '$W/demo/r
 printf 'x,y,z\n10,10,1\n20,10,1\n10,20,1\n' >"$W/three.csv"
 check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/three.csv' --probe-radius 1) -eq 5 ]" "exit 5: registration"
 
+# CSV as a spreadsheet set to a decimal comma writes it (issue 20, item 8): a byte-order mark, a quoted header,
+# ';' between fields, decimal commas, CRLF. The same points, so the same result, number for number.
+awk -F, 'NR == 1 { printf "\357\273\277\"x\";\"y\";\"z\";\"i\";\"j\";\"k\"\r\n"; next }
+         { for (f = 1; f <= NF; f++) { gsub(/\./, ",", $f); printf "%s%s", $f, (f < NF ? ";" : "\r\n") } }' \
+  "$W/demo/raw.csv" >"$W/excel.csv"
+"$P" compensate --cad "$N" --points "$W/excel.csv" --probe-radius 1 --output "$W/excel_out.csv" --quiet ||
+  { echo "FAIL: compensate on the spreadsheet's CSV"; fail=1; }
+"$P" compensate --cad "$N" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/plain_out.csv" --quiet
+check "cmp -s '$W/excel_out.csv' '$W/plain_out.csv'" "the spreadsheet's CSV gives the same output"
+
 # Degenerate point sets are refused with the reason (issue 20, item 10): 500 identical points, 200 on a line
 # across the panel. (Before: the identical points came back "ok" with u = 0.1 um.)
 awk 'BEGIN { print "x,y,z"; for (i = 0; i < 500; i++) print "10,5,3.2" }' >"$W/identical.csv"

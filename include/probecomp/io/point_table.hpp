@@ -15,16 +15,23 @@ namespace probecomp::io {
 
 struct PointTable {
   std::vector<std::string> columns;            // every header name, in file order
-  std::vector<std::vector<std::string>> rows;  // every data row's fields, as written
+  std::vector<std::vector<std::string>> rows;  // every data row's fields, as written (quotes removed)
   std::vector<int> line;                       // the file line of each row (from 1)
   std::vector<Point3> points;                  // x, y, z of each row
   std::optional<std::vector<Vector3>> normals; // i, j, k of each row, when the file has them
   // The columns other than x, y, z, i, j, k, in file order: carried to outputs.
   [[nodiscard]] std::vector<int> carried_columns() const;
+  // For an output CSV whose own columns are `ours`: ",name,..." of the carried columns (a name that is one of
+  // ours prefixed "input_", so that every header name stays unique), and ",field,..." of row k's carried fields,
+  // each quoted where it needs to be (io/text.hpp csv_field).
+  [[nodiscard]] std::string carried_header(const std::vector<std::string>& ours) const;
+  [[nodiscard]] std::string carried_fields(std::size_t k) const;
 };
 
+// CSV as other software writes it: a UTF-8 byte-order mark, CRLF line ends, ',' ';' or tab between fields (the
+// one the header holds most of), names and fields in double quotes, and with ';' or tab a decimal comma.
 // Throws InputError for a missing file, a missing header or column, a malformed or non-finite number, a row
-// with the wrong field count, or no rows at all.
+// with the wrong field count, an unclosed quote, or no rows at all.
 [[nodiscard]] PointTable read_point_csv(const std::filesystem::path& path);
 
 // Writes `text` to `path` through a temporary file renamed at the end, so a failure leaves no partial file.

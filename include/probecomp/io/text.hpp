@@ -19,6 +19,18 @@ namespace probecomp::io {
   return s;
 }
 
+// A field for a comma-separated output: as it is, or in double quotes (its quotes doubled) when it holds a comma,
+// a quote or a line break (RFC 4180), so that a field read from a quoted input is written back whole.
+[[nodiscard]] inline std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + '"';
+}
+
 [[nodiscard]] inline std::string upper(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
   return s;

@@ -1,0 +1,77 @@
+// read_point_csv on CSV as other software writes it (issue 20, item 8), against values written by hand.
+
+#include "probecomp/io/point_table.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "probecomp/error.hpp"
+#include "probecomp/io/text.hpp"
+
+namespace probecomp::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Writes `bytes` to a file of its own and reads it back as a point table.
+PointTable read_text(const std::string& bytes) {
+  const fs::path p = fs::temp_directory_path() /
+                     ("probecomp_point_table_" +
+                      std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + ".csv");
+  std::ofstream(p, std::ios::binary) << bytes;
+  struct Remove {
+    fs::path p;
+    ~Remove() {
+      std::error_code ec;
+      fs::remove(p, ec);
+    }
+  } remove{p};
+  return read_point_csv(p);
+}
+
+TEST(ReadPointCsv, AByteOrderMarkAndCrlfLineEnds) {
+  const PointTable t = read_text("\xEF\xBB\xBFx,y,z\r\n1.5,2,3\r\n4,5,6.25\r\n");
+  ASSERT_EQ(t.points.size(), 2u);
+  EXPECT_EQ(t.columns[0], "x");
+  EXPECT_EQ(t.points[0], Point3(1.5, 2, 3));
+  EXPECT_EQ(t.points[1], Point3(4, 5, 6.25));
+}
+
+TEST(ReadPointCsv, SemicolonsWithDecimalCommasAndTabs) {
+  const PointTable s = read_text("X;Y;Z;label\n1,5;-2,25;3;A,1\n");
+  ASSERT_EQ(s.points.size(), 1u);
+  EXPECT_EQ(s.points[0], Point3(1.5, -2.25, 3));
+  EXPECT_EQ(s.rows[0][3], "A,1");  // a carried field stays as written
+  const PointTable t = read_text("x\ty\tz\n1.5\t2\t3\n");
+  EXPECT_EQ(t.points[0], Point3(1.5, 2, 3));
+}
+
+TEST(ReadPointCsv, QuotedNamesAndFields) {
+  const PointTable t = read_text("\"x\",\"y\",\"z\",\"name\"\n1,2,3,\"bolt, left \"\"A\"\"\"\n");
+  ASSERT_EQ(t.columns.size(), 4u);
+  EXPECT_EQ(t.columns[3], "name");
+  EXPECT_EQ(t.points[0], Point3(1, 2, 3));
+  EXPECT_EQ(t.rows[0][3], "bolt, left \"A\"");
+  EXPECT_EQ(csv_field(t.rows[0][3]), "\"bolt, left \"\"A\"\"\"");  // written back whole
+  EXPECT_EQ(csv_field("plain"), "plain");
+}
+
+TEST(ReadPointCsv, WhatItStillRefusesNamesTheLine) {
+  auto message = [](const std::string& bytes) -> std::string {
+    try {
+      (void)read_text(bytes);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_NE(message("x,y,z\n1,2,\"3\n").find(":2: a quote is not closed"), std::string::npos);
+  // With ',' between fields a decimal comma would be two fields: the count says so.
+  EXPECT_NE(message("x,y,z\n1,5,2,3\n").find(":2: expected 3 fields, found 4"), std::string::npos);
+  EXPECT_NE(message("x;y;z\n1,2,3;2;3\n").find("is not a number: '1,2,3'"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace probecomp::io
