@@ -25,26 +25,9 @@ Samples sample(const Surface& s, std::size_t n, double sigma, std::uint64_t seed
   return testing::sample_surface(s, n, sigma, seed, testing::Noise::AlongNormal, u_fraction);
 }
 
-struct Deviation {
-  double max = 0.0, rms = 0.0;
-};
-
 // |fit − truth| on a 101 × 101 grid over u ≤ u_max (as a fraction of the domain).
-Deviation deviation(const Surface& fit, const Surface& truth, double u_fraction = 1.0) {
-  const nurbs::Domain d = truth.domain();
-  Deviation out;
-  constexpr int kGrid = 101;
-  for (int a = 0; a < kGrid; ++a) {
-    for (int b = 0; b < kGrid; ++b) {
-      const double u = d.u0 + u_fraction * (d.u1 - d.u0) * a / (kGrid - 1);
-      const double v = d.v0 + (d.v1 - d.v0) * b / (kGrid - 1);
-      const double e = (nurbs::evaluate(fit, u, v) - nurbs::evaluate(truth, u, v)).norm();
-      out.max = std::max(out.max, e);
-      out.rms += e * e;
-    }
-  }
-  out.rms = std::sqrt(out.rms / (kGrid * kGrid));
-  return out;
+testing::SurfaceDeviation deviation(const Surface& fit, const Surface& truth, double u_fraction = 1.0) {
+  return testing::surface_deviation(fit, truth, 101, u_fraction);
 }
 
 TEST(FitControlPoints, RecoversANoiseFreeRationalSurfaceFromAPerturbedStart) {
@@ -53,7 +36,7 @@ TEST(FitControlPoints, RecoversANoiseFreeRationalSurfaceFromAPerturbedStart) {
   const Samples data = sample(truth, 5000, 0.0, 3);
   const FitResult fit = fit_control_points(start, data.points, data.params);
   ASSERT_TRUE(fit.ok());
-  const Deviation e = deviation(fit.surface, truth);
+  const testing::SurfaceDeviation e = deviation(fit.surface, truth);
   EXPECT_LE(e.max, 1e-9) << "iterations " << fit.iterations;
   EXPECT_LE(fit.max_residual, 1e-9);
   EXPECT_EQ(fit.surface.num_u(), truth.num_u());
@@ -68,7 +51,7 @@ TEST(FitControlPoints, FiveMicronNoiseOnTenThousandPointsGivesUnderOneMicronRmsF
   const Samples data = sample(truth, 10'000, sigma, 4);
   const FitResult fit = fit_control_points(start, data.points, data.params);
   ASSERT_TRUE(fit.ok());
-  const Deviation e = deviation(fit.surface, truth);
+  const testing::SurfaceDeviation e = deviation(fit.surface, truth);
   EXPECT_LE(e.rms, 0.001);
   // The residuals are the noise, less the part the 300 unknowns absorb.
   EXPECT_NEAR(fit.rms, sigma * std::sqrt(1.0 - 300.0 / 10'000.0), 0.1 * sigma);
@@ -81,7 +64,7 @@ TEST(FitControlPoints, DataOnHalfTheSurfaceFitThatHalfAndLeaveTheRestBounded) {
     const Samples data = sample(truth, 5000, sigma, 8, 0.5);
     const FitResult fit = fit_control_points(start, data.points, data.params);
     ASSERT_TRUE(fit.ok());
-    const Deviation covered = deviation(fit.surface, truth, 0.5);
+    const testing::SurfaceDeviation covered = deviation(fit.surface, truth, 0.5);
     if (sigma == 0.0) {
       EXPECT_LE(covered.max, 1e-9);
     } else {

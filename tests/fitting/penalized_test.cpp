@@ -24,17 +24,8 @@ Samples sample(const Surface& s, std::size_t n, double sigma, std::uint64_t seed
   return testing::sample_surface(s, n, sigma, seed, testing::Noise::Isotropic);
 }
 
-double worst_gap(const Surface& a, const Surface& b) {
-  const nurbs::Domain d = a.domain();
-  double worst = 0.0;
-  for (int i = 0; i <= 60; ++i) {
-    for (int j = 0; j <= 60; ++j) {
-      const double u = d.u0 + (d.u1 - d.u0) * i / 60.0, v = d.v0 + (d.v1 - d.v0) * j / 60.0;
-      worst = std::max(worst, (nurbs::evaluate(a, u, v) - nurbs::evaluate(b, u, v)).norm());
-    }
-  }
-  return worst;
-}
+// Largest |a − b| on a 61 × 61 grid over b's domain.
+double worst_gap(const Surface& a, const Surface& b) { return testing::surface_deviation(a, b, 61).max; }
 
 TEST(FitPenalized, ExactDataFromASurfaceWithTheSameKnotsAreFollowedToASmallFractionOfAMicrometre) {
   const Surface truth = testing::random_rational_surface(3, {.nu = 8, .nv = 7});

@@ -144,4 +144,21 @@ SurfaceSamples sample_surface(const nurbs::Surface& s, std::size_t n, double sig
   return out;
 }
 
+SurfaceDeviation surface_deviation(const nurbs::Surface& fit, const nurbs::Surface& truth, int grid,
+                                   double u_fraction) {
+  const nurbs::Domain d = truth.domain();
+  SurfaceDeviation out;
+  for (int a = 0; a < grid; ++a) {
+    for (int b = 0; b < grid; ++b) {
+      const double u = d.u0 + u_fraction * (d.u1 - d.u0) * a / (grid - 1);
+      const double v = d.v0 + (d.v1 - d.v0) * b / (grid - 1);
+      const double e = (nurbs::evaluate(fit, u, v) - nurbs::evaluate(truth, u, v)).norm();
+      out.max = std::max(out.max, e);
+      out.rms += e * e;
+    }
+  }
+  out.rms = std::sqrt(out.rms / (static_cast<double>(grid) * grid));
+  return out;
+}
+
 }  // namespace probecomp::testing

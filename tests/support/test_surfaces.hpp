@@ -56,4 +56,12 @@ enum class Noise {
 [[nodiscard]] SurfaceSamples sample_surface(const nurbs::Surface& s, std::size_t n, double sigma, std::uint64_t seed,
                                             Noise noise, double u_fraction = 1.0);
 
+// |fit − truth| over a grid × grid lattice of parameters over truth's domain, u in its first `u_fraction` (the
+// two surfaces share a parametrisation, as a fit on fixed knots and its truth do): largest and rms, mm.
+struct SurfaceDeviation {
+  double max = 0.0, rms = 0.0;
+};
+[[nodiscard]] SurfaceDeviation surface_deviation(const nurbs::Surface& fit, const nurbs::Surface& truth, int grid,
+                                                 double u_fraction = 1.0);
+
 }  // namespace probecomp::testing
