@@ -153,6 +153,20 @@ constexpr std::array<double, 5> kGaussWeights = {0.2369268850561891, 0.478628670
 constexpr std::size_t kChunkPoints = 16384;
 constexpr std::size_t kChunkMemoryBytes = std::size_t{64} << 20;
 
+// The start surface's basis at t: its rational basis functions in rb, the unknown each one multiplies in idx, and
+// the start surface's point S⁰(t) (the basis row every use of a point needs).
+Vector3 basis_row(const Surface& s, const Ordering& order, const SurfaceParameter& t, RationalBasis& rb, int* idx) {
+  detail::rational_basis(s, t.u, t.v, rb);
+  const int q = s.q(), m = (s.p() + 1) * (q + 1);
+  Vector3 S0 = Vector3::Zero();
+  for (int a = 0; a < m; ++a) {
+    const int i = rb.i0 + a / (q + 1), j = rb.j0 + a % (q + 1);
+    idx[a] = order.index(i, j);
+    S0 += rb.R[a] * s.control_point(i, j);
+  }
+  return S0;
+}
+
 // The data's normal equations for the displacement: AᵀWA, AᵀWy and yᵀWy with y_k = x_k − S⁰(u_k, v_k).
 struct DataTerms {
   Band AtWA;
@@ -181,14 +195,7 @@ DataTerms assemble_data(const Surface& s, const Ordering& order, int b, std::spa
     for (std::size_t k = n_points * c / chunks; k < n_points * (c + 1) / chunks; ++k) {
       const double w = weights.empty() ? 1.0 : weights[k];
       if (w == 0.0) continue;
-      detail::rational_basis(s, params[k].u, params[k].v, rb);
-      Vector3 S0 = Vector3::Zero();
-      for (int a = 0; a < m; ++a) {
-        const int i = rb.i0 + a / (q + 1), j = rb.j0 + a % (q + 1);
-        idx[a] = order.index(i, j);
-        S0 += rb.R[a] * s.control_point(i, j);
-      }
-      const Vector3 y = points[k] - S0;
+      const Vector3 y = points[k] - basis_row(s, order, params[k], rb, idx);
       t.AtWA.add_outer(idx, rb.R, m, w);
       for (int a = 0; a < m; ++a) {
         for (int c3 = 0; c3 < 3; ++c3) t.AtWy[3 * static_cast<std::size_t>(idx[a]) + c3] += w * rb.R[a] * y[c3];
@@ -335,15 +342,8 @@ CvRows cv_rows(const Surface& s, const Ordering& order, std::span<const Point3> 
     RationalBasis rb;
     for (std::size_t r = range.begin(); r != range.end(); ++r) {
       const std::size_t k = chosen[r];
-      detail::rational_basis(s, params[k].u, params[k].v, rb);
-      Vector3 S0 = Vector3::Zero();
-      for (std::size_t a = 0; a < m; ++a) {
-        const int i = rb.i0 + static_cast<int>(a) / (q + 1), j = rb.j0 + static_cast<int>(a) % (q + 1);
-        rows.idx[r * m + a] = order.index(i, j);
-        rows.R[r * m + a] = rb.R[a];
-        S0 += rb.R[a] * s.control_point(i, j);
-      }
-      rows.y[r] = points[k] - S0;
+      rows.y[r] = points[k] - basis_row(s, order, params[k], rb, &rows.idx[r * m]);
+      std::copy(rb.R, rb.R + m, &rows.R[r * m]);
       rows.w[r] = weights.empty() ? 1.0 : weights[k];
     }
   });
@@ -520,19 +520,6 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   result.weight_sum = data.weight_sum;
   result.points_used = data.used;
 
-  result.variance_factor.assign(n_points, 0.0);
-  const int p = start.p(), q = start.q();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_points, 1024), [&](const auto& range) {
-    RationalBasis rb;
-    int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
-    const int m = (p + 1) * (q + 1);
-    for (std::size_t k = range.begin(); k != range.end(); ++k) {
-      detail::rational_basis(start, params[k].u, params[k].v, rb);
-      for (int a = 0; a < m; ++a) idx[a] = order.index(rb.i0 + a / (q + 1), rb.j0 + a % (q + 1));
-      const double v = band_quadratic_form(Z, b, idx, rb.R, m);
-      result.variance_factor[k] = v;
-    }
-  });
   // The smoothing bias E[D̂] − D = −λ (AᵀWA + λG + εI)⁻¹ G D of the penalised fit (the whisker ε's own share
   // left out: far below the data's), with an estimate of D for the unknown D (a plug-in estimate, as for kernel
   // smoothers' bias: it sees the shape the fit found, which the penalty has shrunk already, so it reads low where
@@ -559,15 +546,19 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     std::vector<double> corrected = bias_of(best.D);
     for (std::size_t k = 0; k < corrected.size(); ++k) corrected[k] = best.D[k] - corrected[k];
     const std::vector<double> beta = bias_of(corrected);
+    // Each point's variance factor and smoothing bias, from one evaluation of its basis row.
+    result.variance_factor.assign(n_points, 0.0);
     result.smoothing_bias.assign(n_points, Vector3::Zero());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_points, 1024), [&](const auto& range) {
       RationalBasis rb;
-      const int m = (p + 1) * (q + 1);
+      int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
+      const int m = (start.p() + 1) * (start.q() + 1);
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
-        detail::rational_basis(start, params[k].u, params[k].v, rb);
+        (void)basis_row(start, order, params[k], rb, idx);
+        result.variance_factor[k] = band_quadratic_form(Z, b, idx, rb.R, m);
         Vector3 e = Vector3::Zero();
         for (int a = 0; a < m; ++a) {
-          const std::size_t I = static_cast<std::size_t>(order.index(rb.i0 + a / (q + 1), rb.j0 + a % (q + 1)));
+          const std::size_t I = static_cast<std::size_t>(idx[a]);
           e += rb.R[a] * Vector3(beta[3 * I], beta[3 * I + 1], beta[3 * I + 2]);
         }
         result.smoothing_bias[k] = e;
