@@ -1,6 +1,6 @@
 // Accuracy of the CAD method on the free-form case and its variants, over noise seeds: a command that prints its
 // own figures (issue 19's bars), not a timed benchmark.
-//   probecomp_fit_cases CASE SIGMA SEEDS      CASE: grid (7 200 points), random (6 000 shuffled, no i,j,k),
+//   [REPEATS=f [REMEASURED=1]] probecomp_fit_cases CASE SIGMA SEEDS      CASE: grid (7 200 points), random (6 000 shuffled, no i,j,k),
 //                                             random3000, steep (the dent narrowed to 19° flanks); SIGMA in mm
 // Errors are signed distances of the compensated points from the actual surface the simulator made; "maxall"
 // includes flagged rows; coverage is the share of ok rows whose error is within ±2u, overall and in the worst of
@@ -27,6 +27,9 @@ int main(int argc, char** argv) {
     o.noise_sigma = sigma;
     if (which == "random" || which == "random3000") { o.random_points = which == "random" ? 6000 : 3000; o.shuffle = true; o.approach_normals = false; }
     if (which == "steep") o.steep_dent = true;
+    // REPEATS=f: a fraction f of the points recorded twice (REMEASURED=1: a second touch with its own noise).
+    if (const char* f = std::getenv("REPEATS")) o.repeated_fraction = std::atof(f);
+    o.exact_repeats = std::getenv("REMEASURED") == nullptr;
     const auto r = studies::run_freeform_study(o);
     const auto& c = r.cad_summary;
     int flagged = 0; for (auto& p : r.cad.points) flagged += p.status != compensation::PointStatus::Ok;

@@ -64,7 +64,10 @@ compensation::CompensationResult run_pipeline(const Loaded& l, double r, compens
   o.progress = Progress{Stopwatch(), quiet};
   std::optional<std::span<const Vector3>> normals;
   if (l.table.normals) normals = std::span<const Vector3>(*l.table.normals);
-  return compensation::compensate(l.model, l.table.points, normals, o);
+  compensation::CompensationResult result = compensation::compensate(l.model, l.table.points, normals, o);
+  // Warnings go out even with --quiet: they change how the numbers are read.
+  for (const std::string& w : result.warnings) std::cerr << "probecomp: warning: " << w << "\n";
+  return result;
 }
 
 // The write step: the points (CSV or DMIS, by the extension), the report and the statistics, all or none (standard

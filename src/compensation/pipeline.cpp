@@ -12,6 +12,7 @@
 #include "probecomp/compensation/conventional.hpp"
 #include "probecomp/compensation/outliers.hpp"
 #include "probecomp/error.hpp"
+#include "probecomp/geometry/neighbours.hpp"
 #include "probecomp/geometry/statistics.hpp"
 #include "probecomp/geometry/stopwatch.hpp"
 #include "probecomp/nurbs/closest_point.hpp"
@@ -124,6 +125,20 @@ void check_point_spread(std::span<const Point3> raw) {
                      " mm across it, " + mm(spread[2]) +
                      " mm along it): they cannot fix the part's rotation about that line nor measure a surface");
   }
+}
+
+// The fit's per-point results for every member of a face, from those of the member's position among the points
+// fitted (`position`: member → fitted point).
+void per_member(fitting::AdaptiveFitResult& fit, std::span<const std::uint32_t> position) {
+  auto expand = [&](auto& values) {
+    std::remove_reference_t<decltype(values)> out(position.size());
+    for (std::size_t i = 0; i < position.size(); ++i) out[i] = values[position[i]];
+    values = std::move(out);
+  };
+  expand(fit.params);
+  expand(fit.residuals);
+  expand(fit.variance_factor);
+  expand(fit.misfit);
 }
 
 void check_registration(const registration::RegistrationResult& r) {
@@ -259,17 +274,31 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     if (rep.material == cad::MaterialSource::NoPoints) rep.material = cad::MaterialSource::File;
     const std::vector<std::size_t>& members = ff.members;
     const nurbs::Surface start = fit_start(prepared.offset->model.faces[static_cast<std::size_t>(f)].surface, T);
-    const double needed = options.min_points_per_control_point * start.num_u() * start.num_v();
+    std::vector<Point3> member_points;
+    member_points.reserve(members.size());
+    for (std::size_t k : members) member_points.push_back(raw[k]);
+    // A point at an earlier point's position (a reading recorded twice: a scanner's repeated sample, a row copied)
+    // is one observation: fitted once. Counted twice it would be its own nearest neighbour, so the noise estimate
+    // (differences of neighbouring residuals) would read low, the cross-validation would take the copies as
+    // confirming each other, and the fit would chase the noise (10 % repeated on the free-form case: 1 927
+    // control points instead of 783).
+    const std::vector<std::uint32_t> first = geometry::first_at_same_position(member_points, kSamePosition);
+    std::vector<std::uint32_t> position(members.size());  // member → its position among the fitted points
     std::vector<Point3> pts;
-    pts.reserve(members.size());
-    ff.params.reserve(members.size());
-    for (std::size_t k : members) {
-      pts.push_back(raw[k]);
-      ff.params.push_back({registration.matches[k].u, registration.matches[k].v});
+    std::vector<fitting::SurfaceParameter> params;
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      if (first[i] != i) {
+        position[i] = position[first[i]];
+        ++rep.repeated;
+        continue;
+      }
+      position[i] = static_cast<std::uint32_t>(pts.size());
+      pts.push_back(member_points[i]);
+      params.push_back({registration.matches[members[i]].u, registration.matches[members[i]].v});
     }
-    const std::vector<fitting::SurfaceParameter>& params = ff.params;
+    const double needed = options.min_points_per_control_point * start.num_u() * start.num_v();
     std::optional<fitting::AdaptiveFitResult>& fit = ff.fit;
-    std::vector<double> weights(members.size(), 1.0);
+    std::vector<double> weights(pts.size(), 1.0);
     // Each point's nearest other point, once per face for all its refits (the fit's noise estimate takes
     // differences of neighbouring residuals).
     const std::vector<std::uint32_t> nearest = fitting::nearest_neighbours(pts);
@@ -278,8 +307,8 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       ++rep.fits;
       rep.rounds += fit->rounds;
     };
-    std::vector<char> outlier(members.size(), 0);
-    if (static_cast<double>(members.size()) >= needed) {
+    std::vector<char> outlier(pts.size(), 0);
+    if (static_cast<double>(pts.size()) >= needed) {
       // Outliers are decided against the fit itself (compensation/outliers.hpp), left out, and the face refitted,
       // until the set left out no longer changes: a point left out is taken back when the fit made without it
       // predicts it within its bound (a point a fit bent by a gross error had pushed out), so that the set left
@@ -292,19 +321,22 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
         outlier = outliers_against_fit(*fit, weights, options.outliers);
         int changed = 0;
         double largest = 0.0;
-        for (std::size_t i = 0; i < members.size(); ++i) {
+        for (std::size_t i = 0; i < pts.size(); ++i) {
           if ((weights[i] > 0.0) == !outlier[i]) continue;
           weights[i] = outlier[i] ? 0.0 : 1.0;
           ++changed;
           largest = std::max(largest, std::abs(fit->residuals[i]));
         }
-        if (changed == 0 || !moves_fit(largest, members.size(), *fit)) break;
+        if (changed == 0 || !moves_fit(largest, pts.size(), *fit)) break;
       }
     }
     rep.fitted = fit && fit->fitted();
     ff.trusted.resize(members.size());
     // Trusted: what the last fit says (a point taken back or left out after it keeps the last fit's verdict).
-    for (std::size_t i = 0; i < members.size(); ++i) ff.trusted[i] = !outlier[i];
+    for (std::size_t i = 0; i < members.size(); ++i) ff.trusted[i] = !outlier[position[i]];
+    if (fit && fit->fitted()) per_member(*fit, position);
+    ff.params.resize(members.size());
+    for (std::size_t i = 0; i < members.size(); ++i) ff.params[i] = params[position[i]];
     if (rep.fitted) {
       rep.fit_status = fit->status;
       rep.stop_reason = fit_stop_reason(*fit, options.surface);
@@ -321,7 +353,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       rep.stop_reason = fit_stop_reason(*fit, options.surface) + "; its points are offset along the nominal normal";
       fit.reset();
     } else {
-      rep.stop_reason = "not fitted: " + std::to_string(members.size()) + " points off the edges for " +
+      rep.stop_reason = "not fitted: " + std::to_string(pts.size()) + " points off the edges for " +
                         std::to_string(start.num_u() * start.num_v()) + " control points (" + mm(needed) +
                         " needed); its points are offset along the nominal normal";
     }
@@ -544,6 +576,13 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
     out.faces.push_back(std::move(rep));
   }
   out.statistics = statistics(out.points);
+  int repeated = 0;
+  for (const FaceReport& rep : out.faces) repeated += rep.repeated;
+  if (repeated > 0) {
+    out.warnings.push_back(std::to_string(repeated) + " point" + (repeated == 1 ? " repeats" : "s repeat") +
+                           " an earlier point's position exactly (a reading recorded twice): each position was "
+                           "fitted once, and every row is compensated and reported");
+  }
   step("done", 1.0);
   return out;
 }

@@ -50,4 +50,31 @@ std::vector<std::uint32_t> nearest_others(std::span<const Point3> points, int co
   return out;
 }
 
+std::vector<std::uint32_t> first_at_same_position(std::span<const Point3> points, double tolerance) {
+  const std::size_t n = points.size();
+  std::vector<std::uint32_t> first(n);
+  for (std::size_t k = 0; k < n; ++k) first[k] = static_cast<std::uint32_t>(k);
+  if (n < 2) return first;
+  PointCloud cloud{std::vector<Point3>(points.begin(), points.end())};
+  PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  // nanoflann's radius is a squared distance; a point's search always finds itself, so the lowest index found is
+  // at most its own.
+  const double radius_sq = tolerance * tolerance;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
+    std::vector<std::pair<std::uint32_t, double>> found;
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      if (!points[k].allFinite()) continue;
+      found.clear();
+      const double q[3] = {points[k].x(), points[k].y(), points[k].z()};
+      tree.radiusSearch(q, radius_sq, found, nanoflann::SearchParams(32, 0.0, false));
+      for (const auto& [j, d_sq] : found) first[k] = std::min(first[k], j);
+    }
+  });
+  // A chain of points each within the tolerance of the next (never at a tolerance far below the data's
+  // resolution) still names one first point per group: the first point's own first.
+  for (std::size_t k = 0; k < n; ++k) first[k] = first[first[k]];
+  return first;
+}
+
 }  // namespace probecomp::geometry

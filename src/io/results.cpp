@@ -104,7 +104,7 @@ std::string statistics_json(const compensation::CompensationResult& r, const Fil
         << ", \"max_residual\": " << fmt("%.9g", x.max_residual) << ", \"noise_estimate\": " << fmt("%.9g", x.noise_sigma)
         << ", \"effective_dof\": " << fmt("%.6g", x.effective_dof)
         << ", \"log10_smoothing\": " << fmt("%.4g", x.log10_smoothing)
-        << ", \"outliers\": " << x.outliers
+        << ", \"outliers\": " << x.outliers << ", \"repeated_points\": " << x.repeated
         << ", \"noise_reached\": " << (x.fit_status == fitting::AdaptiveFitResult::Status::OK ? "true" : "false");
     }
     j << ", \"stop_reason\": " << json_string(x.stop_reason) << "}";
@@ -117,6 +117,9 @@ std::string statistics_json(const compensation::CompensationResult& r, const Fil
   j << ", \"total\": " << st.total << "},\n \"deviation\": {\"points\": " << st.count(compensation::PointStatus::Ok)
     << ", \"mean\": " << fmt("%.9g", st.deviation_mean) << ", \"std\": " << fmt("%.9g", st.deviation_std)
     << ", \"min\": " << fmt("%.9g", st.deviation_min) << ", \"max\": " << fmt("%.9g", st.deviation_max) << "}";
+  j << ",\n \"warnings\": [";
+  for (std::size_t w = 0; w < r.warnings.size(); ++w) j << (w ? ", " : "") << json_string(r.warnings[w]);
+  j << "]";
   const compensation::Timings& t = r.seconds;
   j << ",\n \"timings\": {\"read\": " << fmt("%.4f", files.read) << ", \"prepare\": " << fmt("%.4f", t.prepare)
     << ", \"register\": " << fmt("%.4f", t.registration) << ", \"fit\": " << fmt("%.4f", t.fitting)

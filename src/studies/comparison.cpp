@@ -61,6 +61,13 @@ MethodComparison compare_methods(const SimulatedMeasurement& m, const Comparison
   const cad::ModelLocator actual_locator(actual);
   out.touches = simulation::simulate_touches(
       actual_locator, m.plan, {.probe_radius = m.probe_radius, .noise_sigma = m.noise_sigma, .seed = m.seed});
+  if (m.repeats_are_copies) {
+    for (std::size_t k = 1; k < out.touches.size(); ++k) {
+      if (m.plan[k].point == m.plan[k - 1].point && m.plan[k].normal == m.plan[k - 1].normal) {
+        out.touches[k] = out.touches[k - 1];
+      }
+    }
+  }
   out.simulate_seconds = clock.restart();
   for (std::size_t k = 0; k < out.touches.size(); ++k) {
     if (out.touches[k].status == simulation::Touch::Status::Missed) {

@@ -27,8 +27,20 @@ FreeformStudyResult run_freeform_study(const FreeformStudyOptions& options) {
     std::mt19937_64 rng(options.seed + 2000);
     std::shuffle(out.plan.begin(), out.plan.end(), rng);
   }
+  if (options.repeated_fraction > 0.0) {
+    std::mt19937_64 rng(options.seed + 3000);
+    std::bernoulli_distribution repeat(std::min(options.repeated_fraction, 1.0));
+    std::vector<simulation::ProgrammedPoint> with_repeats;
+    with_repeats.reserve(out.plan.size() * 2);
+    for (const simulation::ProgrammedPoint& p : out.plan) {
+      with_repeats.push_back(p);
+      if (repeat(rng)) with_repeats.push_back(p);
+    }
+    out.plan = std::move(with_repeats);
+  }
   SimulatedMeasurement m{.nominal = c.nominal, .deformation = c.deformation, .placement = c.placement, .plan = out.plan,
-                         .probe_radius = c.probe_radius, .noise_sigma = c.noise_sigma, .seed = options.seed};
+                         .probe_radius = c.probe_radius, .noise_sigma = c.noise_sigma, .seed = options.seed,
+                         .repeats_are_copies = options.exact_repeats};
   static_cast<MethodComparison&>(out) =
       compare_methods(m, {.approach_normals = options.approach_normals, .compensate = options.compensate});
 

@@ -13,6 +13,7 @@ check "grep -q 'CAD-based (probecomp)' '$W/demo.txt'" "demo prints the compariso
 for f in nominal.igs raw.csv compensated_cad.csv compensated_conventional.csv; do
   check "[ -s '$W/demo/$f' ]" "demo wrote $f"
 done
+N0="$W/demo/nominal.igs"
 # Carried columns come back; every row in order.
 awk -F, 'NR==1{print $0",id"; next} {print $0","NR-1}' "$W/demo/raw.csv" >"$W/raw_id.csv"
 "$P" compensate --cad "$W/demo/nominal.igs" --points "$W/raw_id.csv" --probe-radius 1 --output "$W/out.csv" \
@@ -29,6 +30,17 @@ done
 check "grep -q '\"points\": 7200, \"fitted\": true, \"material_side\": \"approach-normals\"' '$W/stats.json'" "face's material side from the approach normals"
 check "! grep -q 'no-points' '$W/stats.json'" "no face with points reports no-points"
 check "grep -q '<table' '$W/report.html'" "report written"
+check "grep -q '\"warnings\": \[\]' '$W/stats.json'" "no warnings on clean data"
+# A reading recorded twice (720 rows copied after the file): fitted once, said on standard error and in the JSON,
+# and every copy comes back exactly as its original.
+{ cat "$W/raw_id.csv"; sed -n '2,721p' "$W/raw_id.csv"; } >"$W/repeated.csv"
+"$P" compensate --cad "$N0" --points "$W/repeated.csv" --probe-radius 1 --output "$W/repeated_out.csv" \
+  --json "$W/repeated.json" --quiet 2>"$W/repeated.err" || { echo "FAIL: compensate with repeated rows"; fail=1; }
+check "grep -q '^probecomp: warning: 720 points repeat an earlier point' '$W/repeated.err'" "repeated rows: warning on standard error"
+check "grep -q '\"warnings\": \[\"720 points repeat' '$W/repeated.json'" "repeated rows: warning in the JSON"
+check "grep -q '\"repeated_points\": 720' '$W/repeated.json'" "repeated rows: counted on the face"
+check "[ \$(wc -l <'$W/repeated_out.csv') -eq 7921 ]" "repeated rows: every row back"
+check "[ \"\$(sed -n '2,721p' '$W/repeated_out.csv')\" = \"\$(sed -n '7202,7921p' '$W/repeated_out.csv')\" ]" "repeated rows: copies come back as their originals"
 # DMIS out, then DMIS in: the same points.
 "$P" compensate --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/out.dmo" || fail=1
 check "[ \$(grep -c '^FA(P' '$W/out.dmo') -eq 7200 ]" "DMIS output has every point"

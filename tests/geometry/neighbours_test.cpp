@@ -1,9 +1,10 @@
-// nearest_others against lists worked out by hand.
+// nearest_others and first_at_same_position against lists worked out by hand.
 
 #include "probecomp/geometry/neighbours.hpp"
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <vector>
 
 namespace probecomp::geometry {
@@ -30,6 +31,19 @@ TEST(NearestOthers, FewerPointsThanAskedRepeatTheFarthest) {
   EXPECT_EQ(nearest_others(p, 3), (std::vector<std::uint32_t>{1, 1, 1, 0, 0, 0}));
   EXPECT_EQ(nearest_others(std::vector<Point3>{{2, 2, 2}}, 2), (std::vector<std::uint32_t>{0, 0}));
   EXPECT_TRUE(nearest_others({}, 4).empty());
+}
+
+TEST(FirstAtSamePosition, EachPointNamesTheFirstPointAtItsPosition) {
+  const std::vector<Point3> p = {{1, 0, 0}, {2, 0, 0}, {1, 0, 0}, {1, 0, 1e-12}, {2, 0, 0}, {3, 0, 0}, {1, 0, 1e-6}};
+  // 1e-12 apart is one position at a tolerance of 1e-9; 1e-6 is not.
+  EXPECT_EQ(first_at_same_position(p, 1e-9), (std::vector<std::uint32_t>{0, 1, 0, 0, 1, 5, 6}));
+}
+
+TEST(FirstAtSamePosition, AChainWithinTheToleranceIsOneGroupAndNonFinitePointsStandAlone) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Point3> p = {{0, 0, 0}, {0.6, 0, 0}, {1.2, 0, 0}, {nan, 0, 0}, {nan, 0, 0}};
+  EXPECT_EQ(first_at_same_position(p, 1.0), (std::vector<std::uint32_t>{0, 0, 0, 3, 4}));
+  EXPECT_TRUE(first_at_same_position({}, 1.0).empty());
 }
 
 }  // namespace

@@ -79,6 +79,9 @@ struct FaceReport {
   double log10_smoothing = 0.0;   // the fit's smoothing λ, log10, relative to the data's weight (penalized.hpp)
   double mean_uncertainty = 0.0;  // mean u over the face's computed points, mm
   int outliers = 0;
+  // Points at the position of an earlier point of the face (within 1e-9 mm: a reading recorded twice): fitted once
+  // as one observation, each still compensated and reported.
+  int repeated = 0;
   std::optional<nurbs::Surface> centre_surface;  // the fitted probe-centre surface, machine frame (when fitted)
 };
 
@@ -204,6 +207,9 @@ struct CompensationResult {
   std::vector<FaceReport> faces;                  // faces that hold points, by index
   Statistics statistics;
   Timings seconds;
+  // What the user should know to read the result right, one line each (the command line prints them on standard
+  // error and in --json): never a silent change to what was asked.
+  std::vector<std::string> warnings;
   [[nodiscard]] int count(PointStatus s) const { return statistics.count(s); }
 };
 

@@ -15,4 +15,8 @@ namespace probecomp::geometry {
 // point (a point alone lists itself). Parallel, deterministic.
 [[nodiscard]] std::vector<std::uint32_t> nearest_others(std::span<const Point3> points, int count);
 
+// For each point, the index of the first point (lowest index) within `tolerance` (mm) of it: itself unless it
+// repeats an earlier point's position. Parallel, deterministic.
+[[nodiscard]] std::vector<std::uint32_t> first_at_same_position(std::span<const Point3> points, double tolerance);
+
 }  // namespace probecomp::geometry

@@ -32,6 +32,9 @@ struct SimulatedMeasurement {
   double probe_radius = 1.0;                // mm
   double noise_sigma = 0.0;                 // mm, on each coordinate of the centre
   std::uint64_t seed = 1;                   // the noise
+  // A programmed point equal to the one before it (point and normal) is a sample the probe recorded twice: the
+  // same reading written again (a scanner's repeated sample), not a new touch with its own noise.
+  bool repeats_are_copies = false;
 };
 
 struct ComparisonOptions {

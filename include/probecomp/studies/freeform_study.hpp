@@ -19,6 +19,11 @@ struct FreeformStudyOptions {
   std::uint64_t seed = 1;       // noise, random points and shuffling
   double noise_sigma = -1.0;    // >= 0: replaces the case's σ (mm)
   bool steep_dent = false;      // the dent narrowed to a Gaussian width of 1.75 mm: flanks sloping up to 19°
+  // This fraction of the points (chosen at random) measured twice in a row: as a repeated reading (the same
+  // numbers twice, as a scanner's repeated sample) or, with exact_repeats false, as a second touch with its own
+  // noise.
+  double repeated_fraction = 0.0;
+  bool exact_repeats = true;
   compensation::CompensateOptions compensate;  // method and probe radius are set by the study
 };
 
