@@ -38,7 +38,7 @@ std::vector<double> numbers(const std::string& text, const std::string& what) {
 
 void check_probe_radius(double r) {
   if (!(r > 0.0) || !std::isfinite(r)) {
-    throw std::invalid_argument("--probe-radius must be a positive number of mm, not " + fmt("%g", r));
+    throw std::invalid_argument("--probe-radius must be a positive, finite length, not " + fmt("%g", r));
   }
 }
 

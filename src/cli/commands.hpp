@@ -14,14 +14,16 @@ namespace probecomp::cli {
 
 struct CompensateArgs {
   std::string cad, points, output, json, report, method = "cad";
-  double probe_radius = 0.0;
+  std::string units;           // of the point file (mm or inch); empty: mm, or what a DMIS file says
+  double probe_radius = 0.0;   // in the points' unit
   bool quiet = false;
 };
 int run_compensate(const CompensateArgs& args);
 
 struct FitArgs {
   std::string cad, points, output, json;
-  double probe_radius = 0.0;
+  std::string units;           // as CompensateArgs
+  double probe_radius = 0.0;   // in the points' unit
   bool quiet = false;
 };
 int run_fit(const FitArgs& args);

@@ -44,23 +44,28 @@ struct Loaded {
   Stopwatch run;  // the whole command, from before reading
   io::PointTable table;
   cad::Model model;
+  io::RunInputs inputs;  // the probe radius in mm
   double seconds = 0.0;
 };
 
-// The load step: the points and the CAD model.
-Loaded load(const std::string& cad_path, const std::string& points_path, double r) {
+// The load step: the points (in their unit: --units, a DMIS UNITS statement, else mm) and the CAD model. The
+// probe radius is in the points' unit, as a measurement program in inches states its styli.
+Loaded load(const std::string& cad_path, const std::string& points_path, double r, const std::string& units) {
   check_probe_radius(r);
   Loaded l;
-  l.table = io::read_points(points_path);
+  std::optional<io::LengthUnit> declared;
+  if (!units.empty()) declared = io::length_unit(units);
+  l.table = io::read_points(points_path, declared);
   l.model = cad::Model::load(cad_path);
+  l.inputs = {.cad = cad_path, .points = points_path, .points_unit = l.table.unit, .probe_radius = r * l.table.unit.mm};
   l.seconds = l.run.seconds();
   return l;
 }
 
-compensation::CompensationResult run_pipeline(const Loaded& l, double r, compensation::Method method, bool quiet) {
+compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Method method, bool quiet) {
   compensation::CompensateOptions o;
   o.method = method;
-  o.probe_radius = r;
+  o.probe_radius = l.inputs.probe_radius;
   o.progress = Progress{Stopwatch(), quiet};
   std::optional<std::span<const Vector3>> normals;
   if (l.table.normals) normals = std::span<const Vector3>(*l.table.normals);
@@ -80,7 +85,7 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
   if (!a.report.empty()) files.add(a.report, io::html_report(a.cad, a.points, r));
   if (!a.output.empty()) files.add(a.output, text);
   if (!a.json.empty()) {
-    files.add(a.json, io::statistics_json(r, {.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()}));
+    files.add(a.json, io::statistics_json(r, l.inputs, {.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()}));
   }
   files.commit();
   if (a.output.empty()) std::cout << text;
@@ -96,9 +101,9 @@ void print_summary_row(std::ostream& out, const char* name, const studies::Error
 
 int run_compensate(const CompensateArgs& a) {
   io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}, {"--report", a.report}}, {{"--cad", a.cad}, {"--points", a.points}});
-  const Loaded l = load(a.cad, a.points, a.probe_radius);
+  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units);
   const compensation::Method method = a.method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
-  const compensation::CompensationResult r = run_pipeline(l, a.probe_radius, method, a.quiet);
+  const compensation::CompensationResult r = run_pipeline(l, method, a.quiet);
   write_outputs(a, l, r);
   return 0;
 }
@@ -108,9 +113,9 @@ int run_fit(const FitArgs& a) {
     throw std::invalid_argument("--output must end in .igs, .iges, .stp or .step (the fitted surfaces as NURBS)");
   }
   io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}}, {{"--cad", a.cad}, {"--points", a.points}});
-  const Loaded l = load(a.cad, a.points, a.probe_radius);
-  const compensation::CompensationResult r = run_pipeline(l, a.probe_radius, compensation::Method::Cad, a.quiet);
-  const std::vector<nurbs::Surface> surfaces = compensation::fitted_part_surfaces(r, a.probe_radius);
+  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units);
+  const compensation::CompensationResult r = run_pipeline(l, compensation::Method::Cad, a.quiet);
+  const std::vector<nurbs::Surface> surfaces = compensation::fitted_part_surfaces(r, l.inputs.probe_radius);
   if (surfaces.empty()) {
     throw FitError("no face holds enough points for a fit, so there is no measured surface to write");
   }
@@ -118,7 +123,7 @@ int run_fit(const FitArgs& a) {
   io::OutputFiles files;
   files.add(a.output, [&](const std::filesystem::path& temporary) { cad::write_surfaces(temporary, surfaces); });
   if (!a.json.empty()) {
-    files.add(a.json, io::statistics_json(r, {.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()}));
+    files.add(a.json, io::statistics_json(r, l.inputs, {.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()}));
   }
   files.commit();
   return 0;

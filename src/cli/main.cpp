@@ -94,9 +94,11 @@ int run_info(const std::string& part, bool json) {
   return 0;
 }
 
-int run_project(const std::string& part, const std::string& points_file, const std::string& output) {
+int run_project(const std::string& part, const std::string& points_file, const std::string& units,
+                const std::string& output) {
   io::check_outputs_spare_inputs({{"--output", output}}, {{"PART", part}, {"--points", points_file}});
-  const io::PointTable table = io::read_point_csv(points_file);
+  const io::PointTable table = io::read_point_csv(points_file, io::length_unit(units).value_or(io::kMillimetre));
+  const double scale = 1.0 / table.unit.mm;  // mm → the points' unit
   const cad::Model model = cad::read_model(part);
   const cad::ModelLocator locator(model);
   const std::vector<cad::ModelPoint> found = locator.closest_points(table.points);
@@ -106,8 +108,9 @@ int run_project(const std::string& part, const std::string& points_file, const s
   for (std::size_t k = 0; k < found.size(); ++k) {
     const cad::ModelPoint& m = found[k];
     if (m.ok()) {
-      out << mm(m.point.x()) << ',' << mm(m.point.y()) << ',' << mm(m.point.z()) << ',' << unit(m.normal.x()) << ','
-          << unit(m.normal.y()) << ',' << unit(m.normal.z()) << ',' << mm(m.distance) << ',' << m.face << ','
+      out << mm(scale * m.point.x()) << ',' << mm(scale * m.point.y()) << ',' << mm(scale * m.point.z()) << ','
+          << unit(m.normal.x()) << ',' << unit(m.normal.y()) << ',' << unit(m.normal.z()) << ','
+          << mm(scale * m.distance) << ',' << m.face << ','
           << unit(m.u) << ',' << unit(m.v) << ',' << (m.on_trim_edge ? "trim-edge" : "ok");
     } else {
       // Never dropped: the row is there, empty, with the reason.
@@ -153,6 +156,10 @@ int run_plan(const std::string& part, double spacing, const std::string& face_li
 
 }  // namespace
 
+constexpr const char* kUnitsHelp =
+    "Length unit of the point file, mm or inch (default: mm, or the DMIS file's UNITS statement, which must agree); "
+    "outputs for the points use it too, --json stays in mm";
+
 int main(int argc, char** argv) {
   CLI::App app{
       "probecomp: CAD-based contact-probe radius compensation for CMM data.\n"
@@ -174,6 +181,9 @@ int main(int argc, char** argv) {
   project->add_option("--cad", part, "CAD file")->required();
   project->add_option("--points", points, "CSV with a header naming x,y,z (other columns are carried)")->required();
   project->add_option("--output", output, "Output CSV (default: standard output)");
+  std::string project_units = "mm";
+  project->add_option("--units", project_units, "Length unit of the point file and the output, mm (default) or inch")
+      ->check(CLI::IsMember({"mm", "inch"}));
 
   CLI::App* plan = app.add_subcommand("plan", "Nominal measurement points with outward normals on the model's faces.");
   plan->add_option("part", part, "CAD file")->required();
@@ -239,7 +249,8 @@ int main(int argc, char** argv) {
                          "RAW.csv (header naming x,y,z, optional i,j,k; other columns carried) or RAW.dmo (DMIS "
                          "FA(label)=FEAT/POINT,CART,x,y,z,i,j,k)")
       ->required();
-  compensate->add_option("--probe-radius", comp.probe_radius, "Tip radius, mm")->required();
+  compensate->add_option("--probe-radius", comp.probe_radius, "Tip radius, in the points' unit (mm unless --units or the DMIS file says otherwise)")->required();
+  compensate->add_option("--units", comp.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
   compensate->add_option("--method", comp.method,
                          "cad (default): register to the offset model, fit, offset along the fitted normal; "
                          "conventional: c - r*(i,j,k)")
@@ -256,7 +267,8 @@ int main(int argc, char** argv) {
       "fit", "The as-measured part surfaces (fitted contact surfaces, machine frame) as NURBS in IGES or STEP.");
   fit->add_option("--cad", fit_args.cad, "CAD file")->required();
   fit->add_option("--points", fit_args.points, "RAW.csv or RAW.dmo")->required();
-  fit->add_option("--probe-radius", fit_args.probe_radius, "Tip radius, mm")->required();
+  fit->add_option("--probe-radius", fit_args.probe_radius, "Tip radius, in the points' unit (mm unless --units or the DMIS file says otherwise)")->required();
+  fit->add_option("--units", fit_args.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
   fit->add_option("--output", fit_args.output, "ACTUAL.igs or ACTUAL.stp")->required();
   fit->add_option("--json", fit_args.json, "STATS.json as for compensate");
   fit->add_flag("--quiet", fit_args.quiet, "No progress on standard error");
@@ -277,7 +289,7 @@ int main(int argc, char** argv) {
     if (fit->parsed()) return cli::run_fit(fit_args);
     if (demo->parsed()) return cli::run_demo(demo_args);
     if (info->parsed()) return run_info(part, json);
-    if (project->parsed()) return run_project(part, points, output);
+    if (project->parsed()) return run_project(part, points, project_units, output);
     if (plan->parsed()) return run_plan(part, spacing, faces, output);
     if (study->parsed()) return cli::run_study(study_args);
     if (simulate->parsed()) {

@@ -33,7 +33,22 @@ struct DmisPoint {
   Point3 x;
   std::optional<Vector3> n;
   int line = 0;
+  LengthUnit unit;  // of x
 };
+
+// A UNITS statement's length unit, or nothing for any other statement.
+std::optional<LengthUnit> parse_units(const Statement& s, const std::string& name) {
+  const std::string head = upper(without_spaces(s.text));
+  if (!head.starts_with("UNITS/")) return std::nullopt;
+  const std::string length = head.substr(6, head.find(',') == std::string::npos ? std::string::npos : head.find(',') - 6);
+  const std::optional<LengthUnit> u = length_unit(length);
+  // DMIS spells its units in full: "IN" and "M" are our command line's shorthands, not DMIS.
+  if (!u || length == "IN" || length == "M" || length == "FT") {
+    throw InputError(name + ":" + std::to_string(s.line) + ": unknown length unit '" + length +
+                     "' (DMIS has MM, CM, METER, INCH and FEET)");
+  }
+  return u;
+}
 
 // A point definition, or nothing for any other statement.
 std::optional<DmisPoint> parse_point(const Statement& s, const std::string& name) {
@@ -86,9 +101,11 @@ bool is_dmis(const std::filesystem::path& path) {
   return e == ".DMO" || e == ".DMI" || e == ".DMS";
 }
 
-PointTable read_points(const std::filesystem::path& path) { return is_dmis(path) ? read_point_dmis(path) : read_point_csv(path); }
+PointTable read_points(const std::filesystem::path& path, std::optional<LengthUnit> declared) {
+  return is_dmis(path) ? read_point_dmis(path, declared) : read_point_csv(path, declared.value_or(kMillimetre));
+}
 
-PointTable read_point_dmis(const std::filesystem::path& path) {
+PointTable read_point_dmis(const std::filesystem::path& path, std::optional<LengthUnit> declared) {
   const std::string name = path.string();
   std::ifstream in(path);
   if (!in) throw InputError(name + ": cannot be opened (missing or unreadable)");
@@ -113,14 +130,25 @@ PointTable read_point_dmis(const std::filesystem::path& path) {
     throw InputError(name + ":" + std::to_string(start) + ": the file ends inside a statement continued with '$'");
   }
   std::vector<DmisPoint> points;
+  LengthUnit unit = declared.value_or(kMillimetre);
   for (const Statement& s : statements) {
-    if (auto p = parse_point(s, name)) points.push_back(std::move(*p));
+    if (auto u = parse_units(s, name)) {
+      if (declared && !(*u == *declared)) {
+        throw InputError(name + ":" + std::to_string(s.line) + ": the file says its lengths are in " + u->name +
+                         ", not in " + declared->name + " as --units says");
+      }
+      unit = *u;
+    } else if (auto p = parse_point(s, name)) {
+      p->unit = unit;
+      points.push_back(std::move(*p));
+    }
   }
   const bool any_actual = std::any_of(points.begin(), points.end(), [](const DmisPoint& p) { return p.actual; });
   std::erase_if(points, [&](const DmisPoint& p) { return p.actual != any_actual; });
   if (points.empty()) throw InputError(name + ": no points (no FA(...) or F(...) = FEAT/POINT,CART statements)");
   const bool with_normals = points.front().n.has_value();
   PointTable t;
+  t.unit = points.front().unit;
   t.columns = with_normals ? std::vector<std::string>{"label", "x", "y", "z", "i", "j", "k"}
                            : std::vector<std::string>{"label", "x", "y", "z"};
   std::vector<Vector3> normals;
@@ -130,7 +158,7 @@ PointTable read_point_dmis(const std::filesystem::path& path) {
                        (with_normals ? " has no normal i,j,k" : " has a normal i,j,k") + " where the first point " +
                        (with_normals ? "has one" : "has none"));
     }
-    t.points.push_back(p.x);
+    t.points.push_back(p.unit.mm * p.x);
     t.line.push_back(p.line);
     std::vector<std::string> row{p.label, std::to_string(p.x.x()), std::to_string(p.x.y()), std::to_string(p.x.z())};
     if (with_normals) {
@@ -143,11 +171,14 @@ PointTable read_point_dmis(const std::filesystem::path& path) {
   return t;
 }
 
-std::string dmis_point(const std::string& label, const Point3& x, const Vector3& n) {
+std::string dmis_point(const std::string& label, const Point3& x_mm, const Vector3& n, LengthUnit unit) {
+  const Point3 x = x_mm / unit.mm;
   char buf[320];
   std::snprintf(buf, sizeof buf, "FA(%s)=FEAT/POINT,CART,%.9f,%.9f,%.9f,%.12f,%.12f,%.12f\n", label.c_str(), x.x() + 0.0,
                 x.y() + 0.0, x.z() + 0.0, n.x() + 0.0, n.y() + 0.0, n.z() + 0.0);
   return buf;
 }
+
+std::string dmis_units(LengthUnit unit) { return "UNITS/" + upper(unit.name) + ",ANGDEC\n"; }
 
 }  // namespace probecomp::io

@@ -90,11 +90,12 @@ std::string PointTable::carried_fields(std::size_t k) const {
   return out;
 }
 
-PointTable read_point_csv(const std::filesystem::path& path) {
+PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit) {
   const std::string name = path.string();
   std::ifstream in(path);
   if (!in) throw InputError(name + ": cannot be opened (missing or unreadable)");
   PointTable t;
+  t.unit = unit;
   std::string line;
   int number = 0;
   int ix = -1, iy = -1, iz = -1, ii = -1, ij = -1, ik = -1;
@@ -143,7 +144,7 @@ PointTable read_point_csv(const std::filesystem::path& path) {
       if (!std::isfinite(value)) throw InputError(where + "column '" + t.columns[static_cast<std::size_t>(c)] + "' is not finite");
       return value;
     };
-    t.points.emplace_back(number_at(ix), number_at(iy), number_at(iz));
+    t.points.emplace_back(unit.mm * number_at(ix), unit.mm * number_at(iy), unit.mm * number_at(iz));
     if (ii >= 0) {
       Vector3 n(number_at(ii), number_at(ij), number_at(ik));
       if (!(n.norm() > 0.0)) throw InputError(where + "the normal i, j, k is zero");

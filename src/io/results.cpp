@@ -43,12 +43,14 @@ std::string compensated_csv(const PointTable& t, const compensation::Compensatio
   const std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "u", "face", "status"};
   std::ostringstream out;
   out << "x,y,z,nx,ny,nz,deviation,u,face,status" << t.carried_header(ours) << '\n';
+  const double scale = 1.0 / t.unit.mm;  // mm → the input's unit
   for (std::size_t k = 0; k < r.points.size(); ++k) {
     const compensation::CompensatedPoint& p = r.points[k];
     if (p.computed()) {
-      out << mm(p.contact.x()) << ',' << mm(p.contact.y()) << ',' << mm(p.contact.z()) << ',' << unit(p.normal.x()) << ','
-          << unit(p.normal.y()) << ',' << unit(p.normal.z()) << ',' << mm(p.deviation) << ',' << mm(p.uncertainty) << ','
-          << p.face << ',';
+      const Point3 x = scale * p.contact;
+      out << mm(x.x()) << ',' << mm(x.y()) << ',' << mm(x.z()) << ',' << unit(p.normal.x()) << ','
+          << unit(p.normal.y()) << ',' << unit(p.normal.z()) << ',' << mm(scale * p.deviation) << ','
+          << mm(scale * p.uncertainty) << ',' << p.face << ',';
     } else {
       // Never dropped: the row is there, empty, with the reason.
       out << ",,,,,,,," << (p.face >= 0 ? std::to_string(p.face) : "") << ',';
@@ -62,16 +64,20 @@ std::string compensated_csv(const PointTable& t, const compensation::Compensatio
 
 std::string compensated_dmis(const PointTable& t, const compensation::CompensationResult& r, const std::string& source) {
   std::ostringstream out;
+  const std::string u = t.unit.name;
+  const double scale = 1.0 / t.unit.mm;  // mm → the input's unit
   out << "$$ probecomp " << compensation::to_string(r.method) << " compensation of " << source
-      << ": contact points and the normals used, machine frame, mm\n";
-  out << "$$ after each point: its deviation from the registered nominal (mm, + outside), its standard uncertainty u\n"
-      << "$$ along the normal (k = 1, mm), face and status\n";
+      << ": contact points and the normals used, machine frame, " << u << "\n";
+  out << "$$ after each point: its deviation from the registered nominal (" << u
+      << ", + outside), its standard uncertainty u\n"
+      << "$$ along the normal (k = 1, " << u << "), face and status\n";
+  out << dmis_units(t.unit);
   for (std::size_t k = 0; k < r.points.size(); ++k) {
     const compensation::CompensatedPoint& p = r.points[k];
     const std::string label = row_label(t, k);
     if (p.computed()) {
-      out << dmis_point(label, p.contact, p.normal);
-      out << "$$ deviation=" << mm(p.deviation) << " u=" << mm(p.uncertainty) << " face=" << p.face << " status=" << compensation::to_string(p.status) << '\n';
+      out << dmis_point(label, p.contact, p.normal, t.unit);
+      out << "$$ deviation=" << mm(scale * p.deviation) << " u=" << mm(scale * p.uncertainty) << " face=" << p.face << " status=" << compensation::to_string(p.status) << '\n';
     } else {
       out << "$$ FA(" << label << ") not compensated: status=" << compensation::to_string(p.status) << '\n';
     }
@@ -79,10 +85,14 @@ std::string compensated_dmis(const PointTable& t, const compensation::Compensati
   return out.str();
 }
 
-std::string statistics_json(const compensation::CompensationResult& r, const FileTimings& files) {
+std::string statistics_json(const compensation::CompensationResult& r, const RunInputs& inputs,
+                            const FileTimings& files) {
   std::ostringstream j;
   const Eigen::Matrix4d M = r.registration.transform.matrix();
-  j << "{\"method\": \"" << compensation::to_string(r.method) << "\",\n \"transform\": [";
+  j << "{\"method\": \"" << compensation::to_string(r.method) << "\", \"units\": \"mm\",\n \"inputs\": {\"cad\": "
+    << json_string(inputs.cad) << ", \"points\": " << json_string(inputs.points) << ", \"points_unit\": \""
+    << inputs.points_unit.name << "\", \"probe_radius\": " << fmt("%.9g", inputs.probe_radius)
+    << "},\n \"transform\": [";
   for (int a = 0; a < 4; ++a) {
     j << (a ? ",\n               [" : "[");
     for (int b = 0; b < 4; ++b) j << (b ? ", " : "") << fmt("%.15g", M(a, b));

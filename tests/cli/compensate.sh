@@ -41,6 +41,24 @@ check "grep -q '\"warnings\": \[\"720 points repeat' '$W/repeated.json'" "repeat
 check "grep -q '\"repeated_points\": 720' '$W/repeated.json'" "repeated rows: counted on the face"
 check "[ \$(wc -l <'$W/repeated_out.csv') -eq 7921 ]" "repeated rows: every row back"
 check "[ \"\$(sed -n '2,721p' '$W/repeated_out.csv')\" = \"\$(sed -n '7202,7921p' '$W/repeated_out.csv')\" ]" "repeated rows: copies come back as their originals"
+# Units (issue 20, item 6): the same points in inches, with --units inch and the radius in inches, give the same
+# results, written back in inches (x,y,z, deviation and u: 25.4 times smaller); --json stays in mm.
+awk -F, 'BEGIN{OFS=","} NR==1{print; next} {$1=sprintf("%.15g",$1/25.4); $2=sprintf("%.15g",$2/25.4); $3=sprintf("%.15g",$3/25.4); print}' \
+  "$W/raw_id.csv" >"$W/raw_inch.csv"
+"$P" compensate --cad "$N0" --points "$W/raw_inch.csv" --units inch --probe-radius 0.0393700787401575 \
+  --output "$W/out_inch.csv" --json "$W/inch.json" --quiet || { echo "FAIL: compensate --units inch"; fail=1; }
+check "awk -F, 'NR==FNR{if(FNR>1){x[FNR]=\$1;y[FNR]=\$2;z[FNR]=\$3;d[FNR]=\$7;u[FNR]=\$8}; next}
+  FNR>1{e=0; a=\$1*25.4-x[FNR]; if(a<0)a=-a; if(a>e)e=a; a=\$2*25.4-y[FNR]; if(a<0)a=-a; if(a>e)e=a;
+  a=\$3*25.4-z[FNR]; if(a<0)a=-a; if(a>e)e=a; a=\$7*25.4-d[FNR]; if(a<0)a=-a; if(a>e)e=a;
+  a=\$8*25.4-u[FNR]; if(a<0)a=-a; if(a>e)e=a; if(e>m)m=e} END{exit !(FNR==7201 && m<1e-6)}' '$W/out.csv' '$W/out_inch.csv'" \
+  "inch input: every row equals the mm run's to 1e-6 mm, in inches"
+check "grep -q '\"points_unit\": \"inch\", \"probe_radius\": 1}' '$W/inch.json'" "inch input: the JSON names the unit and the radius in mm"
+check "[ \"\$(grep -o '\"deviation\": {[^}]*}' '$W/inch.json')\" = \"\$(grep -o '\"deviation\": {[^}]*}' '$W/stats.json')\" ]" "inch input: JSON deviations in mm, as the mm run's"
+"$P" compensate --cad "$N0" --points "$W/raw_inch.csv" --units inch --probe-radius 0.0393700787401575 \
+  --output "$W/out_inch.dmo" --quiet || { echo "FAIL: compensate --units inch to DMIS"; fail=1; }
+check "sed -n 4p '$W/out_inch.dmo' | grep -qx 'UNITS/INCH,ANGDEC'" "inch DMIS output states its unit"
+expect_error "out_inch.dmo:4: the file says its lengths are in inch, not in mm" "$W/o.csv" \
+  "$P" compensate --cad "$N0" --points "$W/out_inch.dmo" --units mm --probe-radius 1 --output "$W/o.csv"
 # DMIS out, then DMIS in: the same points.
 "$P" compensate --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/out.dmo" || fail=1
 check "[ \$(grep -c '^FA(P' '$W/out.dmo') -eq 7200 ]" "DMIS output has every point"

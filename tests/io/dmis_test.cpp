@@ -68,5 +68,53 @@ TEST(Dmis, WrittenPointsReadBack) {
   EXPECT_EQ(t.rows[0][0], "Q7");
 }
 
+// Issue 20, item 6: DMIS's UNITS statement. 1 inch = 25.4 mm exactly; 25.4 itself is not exact in binary, so
+// products are compared to 1e-12 mm.
+TEST(Dmis, UnitsStatementsScaleThePointsAfterThem) {
+  const io::PointTable t = io::read_point_dmis(write("u1.dmo",
+                                                     "UNITS/INCH,ANGDEC\n"
+                                                     "FA(A)=FEAT/POINT,CART,1,2,-0.5,0,0,1\n"
+                                                     "UNITS/MM,ANGDEC\n"
+                                                     "FA(B)=FEAT/POINT,CART,1,2,-0.5,0,0,1\n"
+                                                     "units / cm , angdec\n"
+                                                     "FA(C)=FEAT/POINT,CART,1,2,-0.5,0,0,1\n"));
+  ASSERT_EQ(t.points.size(), 3u);
+  EXPECT_EQ(t.unit.name, std::string("inch"));  // the unit at the first point: outputs are written in it
+  EXPECT_NEAR((t.points[0] - Point3(25.4, 50.8, -12.7)).norm(), 0.0, 1e-12);
+  EXPECT_EQ(t.points[1], Point3(1, 2, -0.5));
+  EXPECT_NEAR((t.points[2] - Point3(10, 20, -5)).norm(), 0.0, 1e-12);
+  EXPECT_EQ((*t.normals)[0], Vector3(0, 0, 1));  // normals have no unit
+}
+
+TEST(Dmis, TheDeclaredUnitReadsAFileWithoutUnitsAndMustAgreeWithOne) {
+  const auto plain = write("u2.dmo", "FA(A)=FEAT/POINT,CART,1,0,0\nFA(B)=FEAT/POINT,CART,0,1,0\n");
+  const io::PointTable t = io::read_points(plain, io::kInch);
+  EXPECT_EQ(t.unit.name, std::string("inch"));
+  EXPECT_EQ(t.points[0], Point3(25.4, 0, 0));
+  EXPECT_EQ(io::read_points(plain).points[0], Point3(1, 0, 0));  // DMIS's default: mm
+  const auto inch = write("u3.dmo", "$$ x\nUNITS/INCH,ANGDEC\nFA(A)=FEAT/POINT,CART,1,0,0\n");
+  EXPECT_EQ(io::read_points(inch, io::kInch).points[0], Point3(25.4, 0, 0));
+  try {
+    (void)io::read_points(inch, io::kMillimetre);
+    ADD_FAILURE() << "a UNITS statement against --units was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("u3.dmo:2: the file says its lengths are in inch, not in mm"), std::string::npos)
+        << e.what();
+  }
+  try {
+    (void)io::read_points(write("u4.dmo", "UNITS/YARD,ANGDEC\nFA(A)=FEAT/POINT,CART,1,0,0\n"));
+    ADD_FAILURE() << "an unknown unit was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("u4.dmo:1: unknown length unit 'YARD'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Dmis, PointsWrittenInInchesReadBackInMillimetres) {
+  const std::string text = io::dmis_units(io::kInch) + io::dmis_point("P", Point3(25.4, -2.54, 0.127), Vector3(1, 0, 0), io::kInch);
+  EXPECT_NE(text.find("UNITS/INCH,ANGDEC\nFA(P)=FEAT/POINT,CART,1.000000000,-0.100000000,0.005000000,"), std::string::npos) << text;
+  const io::PointTable t = io::read_point_dmis(write("u5.dmo", text));
+  EXPECT_NEAR((t.points[0] - Point3(25.4, -2.54, 0.127)).norm(), 0.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace probecomp

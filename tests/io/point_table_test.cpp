@@ -16,7 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // Writes `bytes` to a file of its own and reads it back as a point table.
-PointTable read_text(const std::string& bytes) {
+PointTable read_text(const std::string& bytes, LengthUnit unit = kMillimetre) {
   const fs::path p = fs::temp_directory_path() /
                      ("probecomp_point_table_" +
                       std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + ".csv");
@@ -28,7 +28,16 @@ PointTable read_text(const std::string& bytes) {
       fs::remove(p, ec);
     }
   } remove{p};
-  return read_point_csv(p);
+  return read_point_csv(p, unit);
+}
+
+TEST(ReadPointCsv, LengthsInTheDeclaredUnitAreReadInMillimetres) {
+  const PointTable t = read_text("x,y,z,i,j,k,id\n1,-0.5,2,0,0,3,7\n", kInch);
+  EXPECT_EQ(t.unit.name, std::string("inch"));
+  EXPECT_NEAR((t.points[0] - Point3(25.4, -12.7, 50.8)).norm(), 0.0, 1e-12);
+  EXPECT_EQ((*t.normals)[0], Vector3(0, 0, 1));  // normals and carried fields keep what the file says
+  EXPECT_EQ(t.rows[0][6], "7");
+  EXPECT_EQ(read_text("x,y,z\n1,2,3\n").unit.name, std::string("mm"));
 }
 
 TEST(ReadPointCsv, AByteOrderMarkAndCrlfLineEnds) {

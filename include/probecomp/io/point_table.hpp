@@ -10,6 +10,7 @@
 
 #include "probecomp/error.hpp"
 #include "probecomp/geometry/types.hpp"
+#include "probecomp/io/units.hpp"
 
 namespace probecomp::io {
 
@@ -17,7 +18,8 @@ struct PointTable {
   std::vector<std::string> columns;            // every header name, in file order
   std::vector<std::vector<std::string>> rows;  // every data row's fields, as written (quotes removed)
   std::vector<int> line;                       // the file line of each row (from 1)
-  std::vector<Point3> points;                  // x, y, z of each row
+  LengthUnit unit = kMillimetre;               // the file's length unit: what its rows hold, and outputs for it use
+  std::vector<Point3> points;                  // x, y, z of each row, in mm
   std::optional<std::vector<Vector3>> normals; // i, j, k of each row, when the file has them
   // The columns other than x, y, z, i, j, k, in file order: carried to outputs.
   [[nodiscard]] std::vector<int> carried_columns() const;
@@ -30,9 +32,9 @@ struct PointTable {
 
 // CSV as other software writes it: a UTF-8 byte-order mark, CRLF line ends, ',' ';' or tab between fields (the
 // one the header holds most of), names and fields in double quotes, and with ';' or tab a decimal comma.
-// Throws InputError for a missing file, a missing header or column, a malformed or non-finite number, a row
-// with the wrong field count, an unclosed quote, or no rows at all.
-[[nodiscard]] PointTable read_point_csv(const std::filesystem::path& path);
+// Lengths are in `unit` (CSV has no place to say). Throws InputError for a missing file, a missing header or
+// column, a malformed or non-finite number, a row with the wrong field count, an unclosed quote, or no rows.
+[[nodiscard]] PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit = kMillimetre);
 
 // Writes `text` to `path` through a temporary file renamed at the end, so a failure leaves no partial file.
 void write_file_atomically(const std::filesystem::path& path, const std::string& text);

@@ -9,12 +9,14 @@
 
 namespace probecomp::io {
 
-// x,y,z,nx,ny,nz,deviation,face,status and the input's other columns (renamed input_NAME where they clash with
-// ours). A point that was not computed keeps its row: empty fields and the reason in `status`.
+// x,y,z,nx,ny,nz,deviation,u,face,status and the input's other columns (renamed input_NAME where they clash with
+// ours), lengths in the input's unit. A point that was not computed keeps its row: empty fields and the reason in
+// `status`.
 [[nodiscard]] std::string compensated_csv(const PointTable& input, const compensation::CompensationResult& result);
 
 // One DMIS FA(label) point per computed point (labels from the input's label or id column, else P1, P2, ...),
-// with its deviation, face and status in a comment; a comment line for each point not computed.
+// with its deviation, face and status in a comment; a comment line for each point not computed. Lengths in the
+// input's unit, stated by a UNITS statement first.
 [[nodiscard]] std::string compensated_dmis(const PointTable& input, const compensation::CompensationResult& result,
                                            const std::string& source);
 
@@ -23,10 +25,18 @@ struct FileTimings {
   double read = 0.0, write = 0.0, total = 0.0;
 };
 
-// The transform (CAD to machine), the registration (converged: bool; status; stop_reason), each face's fit,
-// counts by status, the deviation statistics of the trusted points and the timings in seconds (read, prepare,
-// register, fit, compensate, write, total).
-[[nodiscard]] std::string statistics_json(const compensation::CompensationResult& result, const FileTimings& timings);
+// What the run was given: the files, the points' unit and the probe radius (mm).
+struct RunInputs {
+  std::string cad, points;
+  LengthUnit points_unit = kMillimetre;
+  double probe_radius = 0.0;
+};
+
+// The inputs, the transform (CAD to machine), the registration (converged: bool; status; stop_reason), each face's
+// fit, counts by status, the deviation statistics of the trusted points, the warnings and the timings in seconds
+// (read, prepare, register, fit, compensate, write, total). Lengths in mm, whatever the points' unit.
+[[nodiscard]] std::string statistics_json(const compensation::CompensationResult& result, const RunInputs& inputs,
+                                          const FileTimings& timings);
 
 // A summary page for people: registration, deviation quantiles of the trusted points, a table of the faces.
 [[nodiscard]] std::string html_report(const std::string& cad_file, const std::string& points_file,
