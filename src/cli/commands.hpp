@@ -15,6 +15,7 @@ namespace probecomp::cli {
 struct CompensateArgs {
   std::string cad, points, output, json, report, method = "cad";
   std::string units;           // of the point file (mm or inch); empty: mm, or what a DMIS file says
+  std::string initial_transform;  // T.txt: 4 × 4, CAD → machine (io/transform_file.hpp); empty: identity
   double probe_radius = 0.0;   // in the points' unit
   bool quiet = false;
 };
@@ -23,6 +24,7 @@ int run_compensate(const CompensateArgs& args);
 struct FitArgs {
   std::string cad, points, output, json;
   std::string units;           // as CompensateArgs
+  std::string initial_transform;  // as CompensateArgs
   double probe_radius = 0.0;   // in the points' unit
   bool quiet = false;
 };

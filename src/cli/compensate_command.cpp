@@ -16,6 +16,7 @@
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/io/results.hpp"
 #include "probecomp/io/text.hpp"
+#include "probecomp/io/transform_file.hpp"
 #include "probecomp/studies/freeform_study.hpp"
 
 namespace probecomp::cli {
@@ -45,14 +46,17 @@ struct Loaded {
   io::PointTable table;
   cad::Model model;
   io::RunInputs inputs;  // the probe radius in mm
+  geometry::RigidTransform initial = geometry::RigidTransform::Identity();  // CAD → machine, the registration's start
   double seconds = 0.0;
 };
 
 // The load step: the points (in their unit: --units, a DMIS UNITS statement, else mm) and the CAD model. The
 // probe radius is in the points' unit, as a measurement program in inches states its styli.
-Loaded load(const std::string& cad_path, const std::string& points_path, double r, const std::string& units) {
+Loaded load(const std::string& cad_path, const std::string& points_path, double r, const std::string& units,
+            const std::string& initial_transform) {
   check_probe_radius(r);
   Loaded l;
+  if (!initial_transform.empty()) l.initial = io::read_transform(initial_transform);
   std::optional<io::LengthUnit> declared;
   if (!units.empty()) declared = io::length_unit(units);
   l.table = io::read_points(points_path, declared);
@@ -66,6 +70,7 @@ compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Met
   compensation::CompensateOptions o;
   o.method = method;
   o.probe_radius = l.inputs.probe_radius;
+  o.registration.initial = l.initial;
   o.progress = Progress{Stopwatch(), quiet};
   std::optional<std::span<const Vector3>> normals;
   if (l.table.normals) normals = std::span<const Vector3>(*l.table.normals);
@@ -100,8 +105,9 @@ void print_summary_row(std::ostream& out, const char* name, const studies::Error
 }  // namespace
 
 int run_compensate(const CompensateArgs& a) {
-  io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}, {"--report", a.report}}, {{"--cad", a.cad}, {"--points", a.points}});
-  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units);
+  io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}, {"--report", a.report}},
+                                 {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform}});
+  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform);
   const compensation::Method method = a.method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
   const compensation::CompensationResult r = run_pipeline(l, method, a.quiet);
   write_outputs(a, l, r);
@@ -112,8 +118,9 @@ int run_fit(const FitArgs& a) {
   if (!has_extension(a.output, {".igs", ".iges", ".stp", ".step"})) {
     throw std::invalid_argument("--output must end in .igs, .iges, .stp or .step (the fitted surfaces as NURBS)");
   }
-  io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}}, {{"--cad", a.cad}, {"--points", a.points}});
-  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units);
+  io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}},
+                                 {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform}});
+  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform);
   const compensation::CompensationResult r = run_pipeline(l, compensation::Method::Cad, a.quiet);
   const std::vector<nurbs::Surface> surfaces = compensation::fitted_part_surfaces(r, l.inputs.probe_radius);
   if (surfaces.empty()) {

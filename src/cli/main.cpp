@@ -160,6 +160,11 @@ constexpr const char* kUnitsHelp =
     "Length unit of the point file, mm or inch (default: mm, or the DMIS file's UNITS statement, which must agree); "
     "outputs for the points use it too, --json stays in mm";
 
+constexpr const char* kInitialTransformHelp =
+    "T.txt: where the part roughly is, as a 4 x 4 matrix CAD -> machine (4 lines of 4 numbers, mm; the convention of "
+    "--json's transform). Default: the identity, and a coarse alignment (multi-start ICP) when the registration from "
+    "it is not credible";
+
 int main(int argc, char** argv) {
   CLI::App app{
       "probecomp: CAD-based contact-probe radius compensation for CMM data.\n"
@@ -251,6 +256,7 @@ int main(int argc, char** argv) {
       ->required();
   compensate->add_option("--probe-radius", comp.probe_radius, "Tip radius, in the points' unit (mm unless --units or the DMIS file says otherwise)")->required();
   compensate->add_option("--units", comp.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
+  compensate->add_option("--initial-transform", comp.initial_transform, kInitialTransformHelp);
   compensate->add_option("--method", comp.method,
                          "cad (default): register to the offset model, fit, offset along the fitted normal; "
                          "conventional: c - r*(i,j,k)")
@@ -269,6 +275,7 @@ int main(int argc, char** argv) {
   fit->add_option("--points", fit_args.points, "RAW.csv or RAW.dmo")->required();
   fit->add_option("--probe-radius", fit_args.probe_radius, "Tip radius, in the points' unit (mm unless --units or the DMIS file says otherwise)")->required();
   fit->add_option("--units", fit_args.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
+  fit->add_option("--initial-transform", fit_args.initial_transform, kInitialTransformHelp);
   fit->add_option("--output", fit_args.output, "ACTUAL.igs or ACTUAL.stp")->required();
   fit->add_option("--json", fit_args.json, "STATS.json as for compensate");
   fit->add_flag("--quiet", fit_args.quiet, "No progress on standard error");

@@ -102,7 +102,19 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
     << registration::to_string(r.registration.status) << "\", \"stop_reason\": " << json_string(r.registration.stop_reason)
     << ", \"rms\": " << fmt("%.9g", r.registration.rms)
     << ", \"iterations\": " << r.registration.iterations + r.registration.coarse_iterations
-    << ", \"scale\": " << fmt("%.9g", r.registration.scale) << ", \"inliers\": " << r.registration.inliers << "},\n \"faces\": [";
+    << ", \"scale\": " << fmt("%.9g", r.registration.scale) << ", \"inliers\": " << r.registration.inliers
+    << ", \"starts\": " << r.registration.starts << ", \"free_motions\": [";
+  // Machine frame, as the transform maps to: the motions the data do not fix, held at the start.
+  const auto vec = [](const Vector3& v) { return "[" + fmt("%.9g", v.x()) + ", " + fmt("%.9g", v.y()) + ", " + fmt("%.9g", v.z()) + "]"; };
+  for (std::size_t k = 0; k < r.registration.constraints.free.size(); ++k) {
+    const registration::FreeMotion& f = r.registration.constraints.free[k];
+    const bool rotation = f.kind == registration::FreeMotion::Kind::Rotation;
+    j << (k ? ", " : "") << "{\"kind\": \"" << (rotation ? "rotation" : "translation") << "\", \""
+      << (rotation ? "axis" : "direction") << "\": " << vec(r.registration.transform.linear() * f.direction);
+    if (rotation) j << ", \"through\": " << vec(r.registration.transform * f.through);
+    j << "}";
+  }
+  j << "]},\n \"faces\": [";
   for (std::size_t f = 0; f < r.faces.size(); ++f) {
     const compensation::FaceReport& x = r.faces[f];
     j << (f ? ",\n   " : "\n   ") << "{\"face\": " << x.face << ", \"points\": " << x.points

@@ -73,10 +73,12 @@ struct RegistrationResult {
   double scale = 0.0;          // robust scale σ̂ of the residuals at the end, mm
   int iterations = 0;           // on all points
   int coarse_iterations = 0;    // on the subset first (large point sets; see kCoarseStagePoints)
+  int starts = 1;               // starting transforms tried (more than one: a coarse alignment, credibility.hpp)
   int used = 0;                // correspondences used in the last step (not on an edge, within max_distance)
   int inliers = 0;
   Constraints constraints;     // the motions the data fix; the free ones were held at the start
   std::vector<PointMatch> matches;  // one per input point, in input order
+  std::vector<std::string> notes;   // what a caller should pass on to the user (e.g. how a coarse alignment went)
 
   [[nodiscard]] bool converged() const { return status == Status::Converged; }
 };

@@ -1,0 +1,123 @@
+#include "probecomp/registration/credibility.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "probecomp/geometry/statistics.hpp"
+
+namespace probecomp::registration {
+
+namespace {
+
+std::string percent(double share) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.0f %%", 100.0 * share);
+  return buf;
+}
+
+std::string mm(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g mm", v);
+  return buf;
+}
+
+// A residual for the start's score: |d| where the correspondence is usable and on the probe side, else r.
+double scored(const PointMatch& m, double r) {
+  if (!m.ok() || m.on_edge || m.distance < -0.5 * r) return r;
+  return std::min(std::abs(m.distance), r);
+}
+
+}  // namespace
+
+Credibility assess_registration(const RegistrationResult& r, double probe_radius) {
+  Credibility c;
+  c.scale = r.scale;
+  std::size_t used = 0, inside = 0;
+  for (const PointMatch& m : r.matches) {
+    if (!m.ok() || m.on_edge) continue;
+    ++used;
+    inside += m.distance < -0.5 * probe_radius;
+  }
+  const std::size_t n = std::max<std::size_t>(r.matches.size(), 1);
+  c.overlap = static_cast<double>(used) / static_cast<double>(n);
+  c.inside_share = used > 0 ? static_cast<double>(inside) / static_cast<double>(used) : 0.0;
+  if (c.overlap < kMinOverlap) {
+    c.status = Credibility::Status::LittleOverlap;
+    c.reason = "only " + percent(c.overlap) + " of the points have a correspondence inside a face (at least " +
+               percent(kMinOverlap) + " expected): the points and the model hardly overlap";
+  } else if (c.inside_share > kMaxInsideShare) {
+    c.status = Credibility::Status::InsideMaterial;
+    c.reason = percent(c.inside_share) + " of the points would have the tip centre more than r/2 inside the material (at most " +
+               percent(kMaxInsideShare) + " expected): the model sits on the wrong side of them";
+  } else if (c.scale > kMaxScaleOverRadius * probe_radius) {
+    c.status = Credibility::Status::LargeResiduals;
+    c.reason = "the residuals' robust scale is " + mm(c.scale) + ", more than " + mm(kMaxScaleOverRadius * probe_radius) +
+               " (r/4): the closest points on the model are not reliable correspondences";
+  }
+  return c;
+}
+
+double registration_score(const RegistrationResult& r, double probe_radius) {
+  std::vector<double> residuals;
+  residuals.reserve(r.matches.size());
+  for (const PointMatch& m : r.matches) residuals.push_back(scored(m, probe_radius));
+  return residuals.empty() ? probe_radius : geometry::median_in_place(residuals);
+}
+
+CoarseAlignment coarse_align(const cad::ModelLocator& offset_model, std::span<const Point3> raw, double probe_radius,
+                             const RegistrationOptions& options, const CoarseAlignmentOptions& coarse) {
+  std::vector<Point3> subset;
+  std::size_t finite = 0;
+  for (const Point3& p : raw) finite += p.allFinite();
+  const std::size_t stride = std::max<std::size_t>(finite / std::max<std::size_t>(coarse.subset_points, 1), 1);
+  std::size_t seen = 0;
+  for (const Point3& p : raw) {
+    if (!p.allFinite()) continue;
+    if (seen++ % stride == 0) subset.push_back(p);
+  }
+  CoarseAlignment best;
+  best.transform = options.initial;
+  if (subset.size() < 6) return best;
+  // The points' principal axes through their centroid, in the CAD frame of the initial transform (the starts
+  // turn the model about them, which is turning the points the other way).
+  Point3 centroid = Point3::Zero();
+  for (const Point3& p : subset) centroid += p;
+  centroid /= static_cast<double>(subset.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const Point3& p : subset) cov += (p - centroid) * (p - centroid).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+
+  std::vector<geometry::RigidTransform> starts{options.initial};
+  for (double angle : coarse.angles) {
+    for (int axis = 0; axis < 3; ++axis) {
+      for (double sign : {1.0, -1.0}) {
+        // A turn of the machine-frame points about the centroid, composed after the initial transform.
+        geometry::RigidTransform turn = geometry::RigidTransform::Identity();
+        turn.linear() = Eigen::AngleAxisd(sign * angle * M_PI / 180.0, eig.eigenvectors().col(axis)).toRotationMatrix();
+        turn.translation() = centroid - turn.linear() * centroid;
+        starts.push_back(turn * options.initial);
+      }
+    }
+  }
+  RegistrationOptions o = options;
+  o.criteria.max_iterations = coarse.max_iterations;
+  best.score = std::numeric_limits<double>::infinity();
+  for (const geometry::RigidTransform& start : starts) {
+    o.initial = start;
+    const RegistrationResult r = register_points(offset_model, subset, o);
+    ++best.starts;
+    if (r.status == Status::TooFewPoints || r.status == Status::NumericalError) continue;
+    const double score = registration_score(r, probe_radius);
+    // Strictly better only: ties keep the earlier start (the given one first), so the choice is deterministic.
+    if (score < best.score) {
+      best.score = score;
+      best.transform = r.transform;
+    }
+  }
+  return best;
+}
+
+}  // namespace probecomp::registration
