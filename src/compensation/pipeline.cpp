@@ -4,9 +4,11 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <string_view>
 
 #include "probecomp/compensation/contact.hpp"
 #include "probecomp/compensation/conventional.hpp"
@@ -170,6 +172,36 @@ constexpr double kBetterScore = 0.05;
 // the material. Measured: the cylinder study's 1.5 mm sine (r = 1 mm), a right registration, has 21 %; the
 // die-cast sample 10° off, registered on the wrong side of its walls, 29–45 %.
 constexpr double kMaxInsideShareKept = 0.25;
+
+constexpr const char* kNotFitted = "not fitted: ";
+constexpr const char* kOffsetAlongNominal = "; its points are offset along the nominal normal";
+
+// Faces that hold points but were not fitted, and why (the user can measure more there): one warning, the faces
+// with the most points first, at most kListedFaces of them by name.
+void unfitted_face_warnings(const std::vector<FaceReport>& faces, std::vector<std::string>& warnings) {
+  constexpr std::size_t kListedFaces = 5;
+  std::vector<const FaceReport*> unfitted;
+  int points = 0;
+  for (const FaceReport& f : faces) {
+    if (f.fitted || f.points == 0) continue;
+    unfitted.push_back(&f);
+    points += f.points;
+  }
+  if (unfitted.empty()) return;
+  std::stable_sort(unfitted.begin(), unfitted.end(), [](const FaceReport* a, const FaceReport* b) { return a->points > b->points; });
+  std::string w = std::to_string(unfitted.size()) + " face" + (unfitted.size() == 1 ? "" : "s") + " with points " +
+                  (unfitted.size() == 1 ? "was" : "were") + " not fitted; their " + std::to_string(points) +
+                  " points are offset along the nominal normal (status few-points or edge)";
+  for (std::size_t k = 0; k < std::min(unfitted.size(), kListedFaces); ++k) {
+    // The face's reason without what the whole warning already says.
+    std::string why = unfitted[k]->stop_reason;
+    if (why.starts_with(kNotFitted)) why.erase(0, std::string_view(kNotFitted).size());
+    if (const auto tail = why.find(kOffsetAlongNominal); tail != std::string::npos) why.erase(tail);
+    w += (k == 0 ? ": " : "; ") + std::string("face ") + std::to_string(unfitted[k]->face) + ", " + why;
+  }
+  if (unfitted.size() > kListedFaces) w += "; ... (every face in --json)";
+  warnings.push_back(w);
+}
 
 void check_registration(const registration::RegistrationResult& r) {
   if (r.status == registration::Status::TooFewPoints || r.status == registration::Status::NumericalError) {
@@ -434,12 +466,12 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       ff.params = fit->params;
     } else if (fit) {
       rep.fit_status = fit->status;
-      rep.stop_reason = fit_stop_reason(*fit, options.surface) + "; its points are offset along the nominal normal";
+      rep.stop_reason = fit_stop_reason(*fit, options.surface) + kOffsetAlongNominal;
       fit.reset();
     } else {
-      rep.stop_reason = "not fitted: " + std::to_string(pts.size()) + " points off the edges for " +
+      rep.stop_reason = kNotFitted + std::to_string(pts.size()) + " points off the edges for " +
                         std::to_string(start.num_u() * start.num_v()) + " control points (" + mm(needed) +
-                        " needed); its points are offset along the nominal normal";
+                        " needed)" + kOffsetAlongNominal;
     }
     done += members.size();
     if (progress) progress(static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(raw.size(), 1)));
@@ -645,8 +677,15 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   step("compensation", 0.85);
   out.points = compensate_points(prepared, raw, out.registration, fits);
   out.seconds.compensation = clock.restart();
+  // Every computed point by its face (edge points are not members of their face's fit, but are its points).
+  std::map<int, std::array<int, std::size(kPointStatuses)>> by_face;
+  for (const CompensatedPoint& c : out.points) {
+    if (c.face >= 0) ++by_face[c.face][static_cast<std::size_t>(c.status)];
+  }
   for (FaceFit& ff : fits.faces) {
     FaceReport rep = std::move(ff.report);  // the fits are not needed past this point
+    const auto counts = by_face.find(rep.face);
+    if (counts != by_face.end()) std::copy(counts->second.begin(), counts->second.end(), rep.counts);
     double u_sum = 0.0;
     int u_count = 0;
     for (std::size_t i = 0; i < ff.members.size(); ++i) {
@@ -662,6 +701,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   }
   out.statistics = statistics(out.points);
   registration_warnings(out.registration, out.warnings);
+  unfitted_face_warnings(out.faces, out.warnings);
   int repeated = 0;
   for (const FaceReport& rep : out.faces) repeated += rep.repeated;
   if (repeated > 0) {

@@ -129,7 +129,11 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
         << ", \"outliers\": " << x.outliers << ", \"repeated_points\": " << x.repeated
         << ", \"noise_reached\": " << (x.fit_status == fitting::AdaptiveFitResult::Status::OK ? "true" : "false");
     }
-    j << ", \"stop_reason\": " << json_string(x.stop_reason) << "}";
+    j << ", \"counts\": {";
+    for (std::size_t k = 0; k < std::size(compensation::kPointStatuses); ++k) {
+      j << (k ? ", " : "") << "\"" << compensation::to_string(compensation::kPointStatuses[k]) << "\": " << x.counts[k];
+    }
+    j << "}, \"stop_reason\": " << json_string(x.stop_reason) << "}";
   }
   j << "],\n \"counts\": {";
   const compensation::Statistics& st = r.statistics;

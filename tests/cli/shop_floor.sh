@@ -32,6 +32,11 @@ simulate "$W/partial" 0.3,0.2,-0.1,1,0.5,0
   --json "$W/partial/out.json" --quiet 2>"$W/partial/err" || { echo "FAIL: partial coverage"; fail=1; }
 check "ok_within '$W/partial' 1 5" "partial coverage: ok rows within std 1 um, max 5 um of the truth"
 check "grep -q '\"starts\": 1,' '$W/partial/out.json'" "partial coverage: registered from the given start"
+# Faces too small for their points' control net say so, with what they would need (issue 20, item 5).
+check "grep -q 'warning: [0-9]* faces with points were not fitted; .*: face [0-9]*, [0-9]* points off the edges for [0-9]* control points ([0-9]* needed)' '$W/partial/err'" \
+  "partial coverage: unfitted faces and why on standard error"
+check "grep -q '\"fitted\": false, .*\"counts\": {\"ok\": 0, \"outlier\": 0, \"edge\": [0-9]*, \"few-points\": [1-9][0-9]*,.*\"stop_reason\": \"not fitted: [0-9]* points off the edges for' '$W/partial/out.json'" \
+  "partial coverage: an unfitted face's counts by status and its reason in the JSON"
 
 # 2. 1 mm and 10° off: ICP alone lands on the wrong side of the walls (29 % of the points r/2 inside the
 # material); the coarse alignment finds the right pose, and says so.

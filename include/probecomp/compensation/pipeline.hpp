@@ -79,6 +79,7 @@ struct FaceReport {
   double log10_smoothing = 0.0;   // the fit's smoothing λ, log10, relative to the data's weight (penalized.hpp)
   double mean_uncertainty = 0.0;  // mean u over the face's computed points, mm
   int outliers = 0;
+  int counts[std::size(kPointStatuses)] = {};  // the face's points by status, in the order of kPointStatuses
   // Points at the position of an earlier point of the face (within 1e-9 mm: a reading recorded twice): fitted once
   // as one observation, each still compensated and reported.
   int repeated = 0;
