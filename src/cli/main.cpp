@@ -130,6 +130,22 @@ int run_plan(const std::string& part, double spacing, const std::string& face_li
   const cad::Model model = cad::read_model(part);
   const std::vector<cad::PlannedPoint> plan = cad::plan_points(model, spacing, faces);
   if (plan.empty()) throw std::invalid_argument("no points fit on the chosen faces at spacing " + mm(spacing) + " mm");
+  // A face that bounds no closed solid has no known material side: its normals follow the file's orientation
+  // (S_u × S_v, or its reverse when the face is reversed in its shell), which may point into the material. Said,
+  // never silent: a program measured along inward normals drives the probe through the part.
+  std::vector<int> unknown;
+  for (const cad::PlannedPoint& p : plan) {
+    if (!model.faces[static_cast<std::size_t>(p.face)].material_known && (unknown.empty() || unknown.back() != p.face)) {
+      unknown.push_back(p.face);
+    }
+  }
+  std::sort(unknown.begin(), unknown.end());
+  unknown.erase(std::unique(unknown.begin(), unknown.end()), unknown.end());
+  if (!unknown.empty()) {
+    std::cerr << "probecomp: warning: " << unknown.size() << " of the planned faces (" << unknown.front()
+              << (unknown.size() > 1 ? ", ..." : "") << ") bound no closed solid: their normals follow the file's "
+              << "orientation and may point into the material; check them before measuring\n";
+  }
   std::ostringstream out;
   if (dmis) {
     out << "DMISMN/'probecomp measurement plan for " << part << "',05.3\nUNITS/MM,ANGDEC\n";

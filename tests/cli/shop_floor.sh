@@ -73,4 +73,8 @@ expect_error "T.txt" "$W/o.csv" "$P" compensate --cad "$HPDC" --points "$W/far/r
 check "[ \$(grep -c 'warning: the points do not fix the part' '$W/plane/err') -eq 3 ]" "plane: three free motions on standard error"
 check "grep -q '\"free_motions\": \[{\"kind\": \"translation\", \"direction\": \[.*{\"kind\": \"translation\".*{\"kind\": \"rotation\", \"axis\": \[[^]]*, -*0.99999' '$W/plane/out.json'" \
   "plane: two translations and a rotation about the plane's normal (z) in the JSON"
+# 5. plan on a closed solid: the material side is the solid's, nothing to warn about (item 7; the open model's
+# warning is in plan_project.sh).
+"$P" plan "$HPDC" --spacing 10 --faces 0-5 --output "$W/plan.csv" 2>"$W/plan.err" || { echo "FAIL: plan"; fail=1; }
+check "[ ! -s '$W/plan.err' ]" "plan on a solid: no warning"
 exit $fail
