@@ -7,7 +7,6 @@ P=$1; CAD=$2; W=$3
 rm -rf "$W"; mkdir -p "$W"
 fail=0
 . "$(dirname "$0")/lib.sh"
-check() { if ! eval "$1"; then echo "FAIL: $2"; fail=1; fi; }
 "$P" demo --output-dir "$W/demo" >"$W/demo.txt" || { echo "FAIL: demo"; exit 1; }
 check "grep -q 'CAD-based (probecomp)' '$W/demo.txt'" "demo prints the comparison"
 for f in nominal.igs raw.csv compensated_cad.csv compensated_conventional.csv; do
@@ -90,7 +89,6 @@ expect_error "no_surfaces.stp" "$W/o.csv" "$P" compensate --cad "$W/no_surfaces.
 expect_error "i,j,k" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/no_ijk.csv" --probe-radius 1 --method conventional --output "$W/o.csv"
 expect_error ".igs, .iges" "$W/a.txt" "$P" fit --cad "$N" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/a.txt"
 # The exit status says what kind of failure it was (README, "Exit status").
-status_of() { "$@" >/dev/null 2>&1; echo $?; }
 check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/demo/raw.csv' --probe-radius 0) -eq 2 ]" "exit 2: an option's value"
 check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/nan.csv' --probe-radius 1) -eq 3 ]" "exit 3: bad points"
 check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/far.csv' --probe-radius 1) -eq 3 ]" "exit 3: points nowhere near"

@@ -12,3 +12,8 @@ expect_error() {
     echo "FAIL (output left behind): $*"; fail=1
   fi
 }
+
+# check CONDITION DESCRIPTION: evaluates CONDITION; when false, prints "FAIL: DESCRIPTION" and sets fail=1.
+check() { if ! eval "$1"; then echo "FAIL: $2"; fail=1; fi; }
+# status_of command...: the command's exit status, its output discarded.
+status_of() { "$@" >/dev/null 2>&1; echo $?; }

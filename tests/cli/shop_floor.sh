@@ -9,10 +9,8 @@ P=$1; CAD=$2; W=$3
 rm -rf "$W"; mkdir -p "$W"
 fail=0
 . "$(dirname "$0")/lib.sh"
-check() { if ! eval "$1"; then echo "FAIL: $2"; fail=1; fi; }
 SCORE="$(dirname "$0")/score.awk"
 HPDC="$CAD/asitus_repatch-hpdc.stp"
-status_of() { "$@" >/dev/null 2>&1; echo $?; }
 # ok_within DIR STD_UM MAX_UM: the ok rows' error std and largest |error| (µm) within the bounds, and at least
 # 40 % of the rows ok (the rest: edges, and faces with too few points for a fit). Prints the scores when not.
 ok_within() {
