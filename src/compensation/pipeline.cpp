@@ -1,6 +1,5 @@
 #include "probecomp/compensation/pipeline.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -15,6 +14,7 @@
 #include "probecomp/compensation/outliers.hpp"
 #include "probecomp/error.hpp"
 #include "probecomp/geometry/neighbours.hpp"
+#include "probecomp/geometry/point_set.hpp"
 #include "probecomp/geometry/statistics.hpp"
 #include "probecomp/geometry/stopwatch.hpp"
 #include "probecomp/nurbs/closest_point.hpp"
@@ -55,16 +55,6 @@ std::string mm(double v) {
   return buf;
 }
 
-// Points spread over the input (every n/k-th) for cheap whole-set checks.
-std::vector<Point3> spread_subset(std::span<const Point3> points, std::size_t k) {
-  std::vector<Point3> out;
-  const std::size_t step = std::max<std::size_t>(1, points.size() / k);
-  for (std::size_t i = 0; i < points.size(); i += step) {
-    if (points[i].allFinite()) out.push_back(points[i]);
-  }
-  return out;
-}
-
 // Stops the run when the points are nowhere near the model (wrong file, frame or unit): ICP would otherwise
 // "align" them to whatever is nearest.
 void check_points_near(const cad::ModelLocator& locator, std::span<const Point3> points,
@@ -76,7 +66,7 @@ void check_points_near(const cad::ModelLocator& locator, std::span<const Point3>
     box.extend(b.max);
   }
   // 257 points give the median to within a few per cent of the distribution: plenty for a gross check.
-  std::vector<Point3> subset = spread_subset(points, 257);
+  std::vector<Point3> subset = geometry::spread_subset(points, 257);
   if (subset.empty()) throw InputError("no finite points to compensate");
   const geometry::RigidTransform to_cad = initial.inverse();
   for (Point3& p : subset) p = to_cad * p;
@@ -102,22 +92,11 @@ constexpr double kLineRatio = 1e-6;
 // move, a file of repeated rows), or all on one line (about which nothing fixes the part's rotation, and across
 // which no surface is measured). Principal spreads from the points' covariance.
 void check_point_spread(std::span<const Point3> raw) {
-  Point3 centre = Point3::Zero();
-  std::size_t n = 0;
-  for (const Point3& p : raw) {
-    if (!p.allFinite()) continue;
-    centre += p;
-    ++n;
-  }
+  const geometry::PrincipalAxes axes = geometry::principal_axes(raw);
+  const std::size_t n = axes.count;
   if (n == 0) throw InputError("no finite points to compensate");
-  centre /= static_cast<double>(n);
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for (const Point3& p : raw) {
-    if (p.allFinite()) covariance += (p - centre) * (p - centre).transpose();
-  }
-  covariance /= static_cast<double>(n);
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariance);
-  const Eigen::Vector3d spread = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();  // ascending
+  const Point3& centre = axes.centroid;
+  const Eigen::Vector3d& spread = axes.spread;  // ascending
   if (spread[2] <= kSamePosition) {
     throw InputError("all " + std::to_string(n) + " points are at one position (" + mm(centre.x()) + ", " +
                      mm(centre.y()) + ", " + mm(centre.z()) +
@@ -690,7 +669,6 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
     int u_count = 0;
     for (std::size_t i = 0; i < ff.members.size(); ++i) {
       const CompensatedPoint& c = out.points[ff.members[i]];
-      rep.outliers += c.status == PointStatus::Outlier;
       if (c.computed()) {
         u_sum += c.uncertainty;
         ++u_count;

@@ -40,10 +40,10 @@ struct DmisPoint {
 std::optional<LengthUnit> parse_units(const Statement& s, const std::string& name) {
   const std::string head = upper(without_spaces(s.text));
   if (!head.starts_with("UNITS/")) return std::nullopt;
-  const std::string length = head.substr(6, head.find(',') == std::string::npos ? std::string::npos : head.find(',') - 6);
+  const std::size_t comma = head.find(',');
+  const std::string length = head.substr(6, comma == std::string::npos ? std::string::npos : comma - 6);
   const std::optional<LengthUnit> u = length_unit(length);
-  // DMIS spells its units in full: "IN" and "M" are our command line's shorthands, not DMIS.
-  if (!u || length == "IN" || length == "M" || length == "FT") {
+  if (!u) {
     throw InputError(name + ":" + std::to_string(s.line) + ": unknown length unit '" + length +
                      "' (DMIS has MM, CM, METER, INCH and FEET)");
   }

@@ -105,7 +105,12 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
     << ", \"scale\": " << fmt("%.9g", r.registration.scale) << ", \"inliers\": " << r.registration.inliers
     << ", \"starts\": " << r.registration.starts << ", \"free_motions\": [";
   // Machine frame, as the transform maps to: the motions the data do not fix, held at the start.
-  const auto vec = [](const Vector3& v) { return "[" + fmt("%.9g", v.x()) + ", " + fmt("%.9g", v.y()) + ", " + fmt("%.9g", v.z()) + "]"; };
+  // Appended piecewise: GCC 12 flags `"[" + std::string` with a false -Wrestrict.
+  const auto vec = [](const Vector3& v) {
+    std::string s = "[";
+    s += fmt("%.9g", v.x()) + ", " + fmt("%.9g", v.y()) + ", " + fmt("%.9g", v.z()) + "]";
+    return s;
+  };
   for (std::size_t k = 0; k < r.registration.constraints.free.size(); ++k) {
     const registration::FreeMotion& f = r.registration.constraints.free[k];
     const bool rotation = f.kind == registration::FreeMotion::Kind::Rotation;
@@ -126,7 +131,7 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
         << ", \"max_residual\": " << fmt("%.9g", x.max_residual) << ", \"noise_estimate\": " << fmt("%.9g", x.noise_sigma)
         << ", \"effective_dof\": " << fmt("%.6g", x.effective_dof)
         << ", \"log10_smoothing\": " << fmt("%.4g", x.log10_smoothing)
-        << ", \"outliers\": " << x.outliers << ", \"repeated_points\": " << x.repeated
+        << ", \"outliers\": " << x.count(compensation::PointStatus::Outlier) << ", \"repeated_points\": " << x.repeated
         << ", \"noise_reached\": " << (x.fit_status == fitting::AdaptiveFitResult::Status::OK ? "true" : "false");
     }
     j << ", \"counts\": {";
@@ -175,7 +180,7 @@ std::string html_report(const std::string& cad, const std::string& points, const
   for (const auto& f : r.faces) {
     h << "<tr><td>" << f.face << "</td><td>" << f.points << "</td><td>" << (f.fitted ? "yes" : "no") << "</td><td>"
       << f.control_points << "</td><td>" << f.rounds << "</td><td>" << fmt("%.6f", f.rms) << "</td><td>"
-      << fmt("%.6f", f.noise_sigma) << "</td><td>" << f.outliers << "</td></tr>\n";
+      << fmt("%.6f", f.noise_sigma) << "</td><td>" << f.count(compensation::PointStatus::Outlier) << "</td></tr>\n";
   }
   h << "</table></body></html>\n";
   return h.str();

@@ -8,9 +8,9 @@ std::optional<LengthUnit> length_unit(std::string_view name) {
   const std::string n = lower(std::string(name));
   if (n == "mm") return kMillimetre;
   if (n == "cm") return LengthUnit{"cm", 10.0};
-  if (n == "meter" || n == "m") return LengthUnit{"meter", 1000.0};
-  if (n == "inch" || n == "in") return kInch;
-  if (n == "feet" || n == "ft") return LengthUnit{"feet", 304.8};
+  if (n == "meter") return LengthUnit{"meter", 1000.0};
+  if (n == "inch") return kInch;
+  if (n == "feet") return LengthUnit{"feet", 304.8};
   return std::nullopt;
 }
 

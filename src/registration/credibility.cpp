@@ -1,11 +1,10 @@
 #include "probecomp/registration/credibility.hpp"
 
-#include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
+#include "probecomp/geometry/point_set.hpp"
 #include "probecomp/geometry/statistics.hpp"
 
 namespace probecomp::registration {
@@ -69,35 +68,22 @@ double registration_score(const RegistrationResult& r, double probe_radius) {
 
 CoarseAlignment coarse_align(const cad::ModelLocator& offset_model, std::span<const Point3> raw, double probe_radius,
                              const RegistrationOptions& options, const CoarseAlignmentOptions& coarse) {
-  std::vector<Point3> subset;
-  std::size_t finite = 0;
-  for (const Point3& p : raw) finite += p.allFinite();
-  const std::size_t stride = std::max<std::size_t>(finite / std::max<std::size_t>(coarse.subset_points, 1), 1);
-  std::size_t seen = 0;
-  for (const Point3& p : raw) {
-    if (!p.allFinite()) continue;
-    if (seen++ % stride == 0) subset.push_back(p);
-  }
+  const std::vector<Point3> subset = geometry::spread_subset(raw, coarse.subset_points);
   CoarseAlignment best;
   best.transform = options.initial;
   if (subset.size() < 6) return best;
-  // The points' principal axes through their centroid, in the CAD frame of the initial transform (the starts
-  // turn the model about them, which is turning the points the other way).
-  Point3 centroid = Point3::Zero();
-  for (const Point3& p : subset) centroid += p;
-  centroid /= static_cast<double>(subset.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const Point3& p : subset) cov += (p - centroid) * (p - centroid).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  // The points' principal axes through their centroid (machine frame): each start turns the placed model about
+  // one of them.
+  const geometry::PrincipalAxes axes = geometry::principal_axes(subset);
 
   std::vector<geometry::RigidTransform> starts{options.initial};
   for (double angle : coarse.angles) {
     for (int axis = 0; axis < 3; ++axis) {
       for (double sign : {1.0, -1.0}) {
-        // A turn of the machine-frame points about the centroid, composed after the initial transform.
+        // CAD → machine as the initial transform, then the turn about the axis in the machine frame.
         geometry::RigidTransform turn = geometry::RigidTransform::Identity();
-        turn.linear() = Eigen::AngleAxisd(sign * angle * M_PI / 180.0, eig.eigenvectors().col(axis)).toRotationMatrix();
-        turn.translation() = centroid - turn.linear() * centroid;
+        turn.linear() = Eigen::AngleAxisd(sign * angle * M_PI / 180.0, axes.axes.col(axis)).toRotationMatrix();
+        turn.translation() = axes.centroid - turn.linear() * axes.centroid;
         starts.push_back(turn * options.initial);
       }
     }

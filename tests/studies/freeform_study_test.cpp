@@ -61,30 +61,30 @@ void expect_covers(const Coverage& c, const std::string& what) {
 // single run's worst region: 91 % on the grid, 87 % on 3 000 random points; bench/fit_cases.) The paper's own case
 // (grid, σ = 4.5 µm) is held to the issue's bars by the CLI test of `study freeform --noise` (tests/cli/studies.sh);
 // the cases here are those where u without the penalty's bias estimate falls short.
-TEST(FreeformStudy, UncertaintyCoversTheTrueErrorOnThePanelAndInEachRegion_RandomPointsLowNoise) {
+// The variant `o` run with noise seeds 1–3, its regions pooled.
+Coverage over_three_seeds(studies::FreeformStudyOptions o) {
   Coverage c;
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-    studies::FreeformStudyOptions o;
     o.seed = seed;
-    o.random_points = 3000;
-    o.shuffle = true;
-    o.approach_normals = false;
-    o.noise_sigma = 0.0015;
     add_run(studies::run_freeform_study(o), c);
   }
-  expect_covers(c, "3 000 random points, sigma 1.5 um");
+  return c;
+}
+
+TEST(FreeformStudy, UncertaintyCoversTheTrueErrorOnThePanelAndInEachRegion_RandomPointsLowNoise) {
+  studies::FreeformStudyOptions o;
+  o.random_points = 3000;
+  o.shuffle = true;
+  o.approach_normals = false;
+  o.noise_sigma = 0.0015;
+  expect_covers(over_three_seeds(o), "3 000 random points, sigma 1.5 um");
 }
 
 TEST(FreeformStudy, UncertaintyCoversTheTrueErrorOnThePanelAndInEachRegion_SteepDentLowNoise) {
-  Coverage c;
-  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-    studies::FreeformStudyOptions o;
-    o.seed = seed;
-    o.steep_dent = true;
-    o.noise_sigma = 0.0015;
-    add_run(studies::run_freeform_study(o), c);
-  }
-  expect_covers(c, "steep dent, sigma 1.5 um");
+  studies::FreeformStudyOptions o;
+  o.steep_dent = true;
+  o.noise_sigma = 0.0015;
+  expect_covers(over_three_seeds(o), "steep dent, sigma 1.5 um");
 }
 
 // Issue 20: 10 % of the paper's grid recorded twice as the same reading (a scanner's repeated sample). Counted twice,

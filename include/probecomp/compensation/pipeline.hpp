@@ -78,12 +78,12 @@ struct FaceReport {
   double effective_dof = 0.0;     // tr H of the fit: its effective number of parameters (per coordinate)
   double log10_smoothing = 0.0;   // the fit's smoothing λ, log10, relative to the data's weight (penalized.hpp)
   double mean_uncertainty = 0.0;  // mean u over the face's computed points, mm
-  int outliers = 0;
   int counts[std::size(kPointStatuses)] = {};  // the face's points by status, in the order of kPointStatuses
   // Points at the position of an earlier point of the face (within 1e-9 mm: a reading recorded twice): fitted once
   // as one observation, each still compensated and reported.
   int repeated = 0;
   std::optional<nurbs::Surface> centre_surface;  // the fitted probe-centre surface, machine frame (when fitted)
+  [[nodiscard]] int count(PointStatus s) const { return counts[static_cast<int>(s)]; }
 };
 
 // --- prepare ---

@@ -17,8 +17,7 @@ struct LengthUnit {
 inline constexpr LengthUnit kMillimetre{"mm", 1.0};
 inline constexpr LengthUnit kInch{"inch", 25.4};
 
-// DMIS's length units by name, case-insensitive, with "in", "m" and "ft" for inch, meter and feet; nothing for
-// any other name.
+// DMIS's length units by name (mm, cm, meter, inch, feet), case-insensitive; nothing for any other name.
 [[nodiscard]] std::optional<LengthUnit> length_unit(std::string_view name);
 
 }  // namespace probecomp::io
