@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -40,13 +41,15 @@ using cli::mm;
 using cli::unit;
 
 
-// Writes to the file (atomically) or to standard output when no file is given.
+// Writes to the file (whole or not at all, io::OutputFiles) or to standard output when no file is given.
 void emit(const std::string& output, const std::string& text) {
   if (output.empty()) {
     std::cout << text;
-  } else {
-    io::write_file_atomically(output, text);
+    return;
   }
+  io::OutputFiles file;
+  file.add(output, text);
+  file.commit();
 }
 
 int run_info(const std::string& part, bool json) {
@@ -133,16 +136,12 @@ int run_plan(const std::string& part, double spacing, const std::string& face_li
   // A face that bounds no closed solid has no known material side: its normals follow the file's orientation
   // (S_u × S_v, or its reverse when the face is reversed in its shell), which may point into the material. Said,
   // never silent: a program measured along inward normals drives the probe through the part.
-  std::vector<int> unknown;
+  std::set<int> unknown;
   for (const cad::PlannedPoint& p : plan) {
-    if (!model.faces[static_cast<std::size_t>(p.face)].material_known && (unknown.empty() || unknown.back() != p.face)) {
-      unknown.push_back(p.face);
-    }
+    if (!model.faces[static_cast<std::size_t>(p.face)].material_known) unknown.insert(p.face);
   }
-  std::sort(unknown.begin(), unknown.end());
-  unknown.erase(std::unique(unknown.begin(), unknown.end()), unknown.end());
   if (!unknown.empty()) {
-    std::cerr << "probecomp: warning: " << unknown.size() << " of the planned faces (" << unknown.front()
+    std::cerr << "probecomp: warning: " << unknown.size() << " of the planned faces (" << *unknown.begin()
               << (unknown.size() > 1 ? ", ..." : "") << ") bound no closed solid: their normals follow the file's "
               << "orientation and may point into the material; check them before measuring\n";
   }
@@ -171,6 +170,9 @@ int run_plan(const std::string& part, double spacing, const std::string& face_li
 }
 
 }  // namespace
+
+constexpr const char* kProbeRadiusHelp =
+    "Tip radius, in the points' unit (mm unless --units or the DMIS file says otherwise)";
 
 constexpr const char* kUnitsHelp =
     "Length unit of the point file, mm or inch (default: mm, or the DMIS file's UNITS statement, which must agree); "
@@ -270,7 +272,7 @@ int main(int argc, char** argv) {
                          "RAW.csv (header naming x,y,z, optional i,j,k; other columns carried) or RAW.dmo (DMIS "
                          "FA(label)=FEAT/POINT,CART,x,y,z,i,j,k)")
       ->required();
-  compensate->add_option("--probe-radius", comp.probe_radius, "Tip radius, in the points' unit (mm unless --units or the DMIS file says otherwise)")->required();
+  compensate->add_option("--probe-radius", comp.probe_radius, kProbeRadiusHelp)->required();
   compensate->add_option("--units", comp.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
   compensate->add_option("--initial-transform", comp.initial_transform, kInitialTransformHelp);
   compensate->add_option("--method", comp.method,
@@ -289,7 +291,7 @@ int main(int argc, char** argv) {
       "fit", "The as-measured part surfaces (fitted contact surfaces, machine frame) as NURBS in IGES or STEP.");
   fit->add_option("--cad", fit_args.cad, "CAD file")->required();
   fit->add_option("--points", fit_args.points, "RAW.csv or RAW.dmo")->required();
-  fit->add_option("--probe-radius", fit_args.probe_radius, "Tip radius, in the points' unit (mm unless --units or the DMIS file says otherwise)")->required();
+  fit->add_option("--probe-radius", fit_args.probe_radius, kProbeRadiusHelp)->required();
   fit->add_option("--units", fit_args.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
   fit->add_option("--initial-transform", fit_args.initial_transform, kInitialTransformHelp);
   fit->add_option("--output", fit_args.output, "ACTUAL.igs or ACTUAL.stp")->required();

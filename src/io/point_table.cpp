@@ -7,7 +7,6 @@
 #include <fstream>
 #include <sstream>
 
-#include "probecomp/io/output_files.hpp"
 #include "probecomp/io/text.hpp"
 
 namespace probecomp::io {
@@ -157,12 +156,6 @@ PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit) {
   if (t.points.empty()) throw InputError(name + ": no points");
   if (ii >= 0) t.normals = std::move(normals);
   return t;
-}
-
-void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
-  OutputFiles file;
-  file.add(path, text);
-  file.commit();
 }
 
 }  // namespace probecomp::io

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <random>
 
 namespace probecomp::studies {
@@ -54,7 +55,6 @@ FreeformStudyResult run_freeform_study(const FreeformStudyOptions& options) {
   constexpr int kRegions = 4;
   std::array<int, kRegions * kRegions>& inside = out.region_covered;
   std::array<int, kRegions * kRegions>& counted = out.region_ok;
-  int all_inside = 0, all_counted = 0;
   double u_sum = 0.0;
   for (std::size_t k = 0; k < out.plan.size(); ++k) {
     const compensation::CompensatedPoint& p = out.cad.points[k];
@@ -67,12 +67,12 @@ FreeformStudyResult run_freeform_study(const FreeformStudyOptions& options) {
     const int a = std::clamp(static_cast<int>(kRegions * (x.x() - x0) / std::max(x1 - x0, 1e-12)), 0, kRegions - 1);
     const int b = std::clamp(static_cast<int>(kRegions * (x.y() - y0) / std::max(y1 - y0, 1e-12)), 0, kRegions - 1);
     const bool in = std::abs(out.cad_error[k]) <= 2.0 * p.uncertainty;
-    all_inside += in;
-    ++all_counted;
     inside[static_cast<std::size_t>(a * kRegions + b)] += in;
     ++counted[static_cast<std::size_t>(a * kRegions + b)];
     u_sum += p.uncertainty;
   }
+  const int all_inside = std::accumulate(inside.begin(), inside.end(), 0);
+  const int all_counted = std::accumulate(counted.begin(), counted.end(), 0);
   if (all_counted > 0) {
     out.mean_uncertainty = u_sum / all_counted;
     out.coverage_2u = static_cast<double>(all_inside) / all_counted;

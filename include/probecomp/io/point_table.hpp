@@ -36,7 +36,4 @@ struct PointTable {
 // column, a malformed or non-finite number, a row with the wrong field count, an unclosed quote, or no rows.
 [[nodiscard]] PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit = kMillimetre);
 
-// Writes `text` to `path` through a temporary file renamed at the end, so a failure leaves no partial file.
-void write_file_atomically(const std::filesystem::path& path, const std::string& text);
-
 }  // namespace probecomp::io
