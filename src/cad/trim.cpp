@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 namespace probecomp::cad {
 
@@ -43,6 +44,33 @@ std::vector<double> boundary_samples(const nurbs::Curve& uv, double chord_tolera
   return t;
 }
 
+// The pcurves of a loop meet only to the file's tolerance (1e-9 in v on the die-cast sample's torus fillets). A
+// ray through such a gap crosses one side of it and not the other, and a point on the line of a domain edge
+// (where the closest-point search clamps) is then taken as inside: a phantom face beyond the trim. Each curve
+// end is joined to the nearest other curve end, nearest pairs first, so the polygon is closed.
+void Trim::close_loops() {
+  struct End {
+    Eigen::Vector2d at;
+    bool paired = false;
+  };
+  std::vector<End> ends;
+  for (const BoundaryCurve& c : curves_) {
+    if (c.t.size() < 2) continue;
+    ends.push_back({uv_at(c.uv, c.t.front())});
+    ends.push_back({uv_at(c.uv, c.t.back())});
+  }
+  std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;  // (squared gap, end, end)
+  for (std::size_t i = 0; i < ends.size(); ++i) {
+    for (std::size_t j = i + 1; j < ends.size(); ++j) pairs.emplace_back((ends[i].at - ends[j].at).squaredNorm(), i, j);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  for (const auto& [gap, i, j] : pairs) {
+    if (ends[i].paired || ends[j].paired) continue;
+    ends[i].paired = ends[j].paired = true;
+    if (gap > 0.0) segments_.push_back({ends[i].at.x(), ends[i].at.y(), ends[j].at.x(), ends[j].at.y()});
+  }
+}
+
 Trim::Trim(std::vector<BoundaryCurve> curves) : curves_(std::move(curves)) {
   for (const BoundaryCurve& c : curves_) {
     for (std::size_t k = 0; k + 1 < c.t.size(); ++k) {
@@ -52,6 +80,7 @@ Trim::Trim(std::vector<BoundaryCurve> curves) : curves_(std::move(curves)) {
     }
   }
   if (segments_.empty()) return;
+  close_loops();
   v_min_ = std::numeric_limits<double>::infinity();
   v_max_ = -std::numeric_limits<double>::infinity();
   for (const Segment& s : segments_) {

@@ -17,6 +17,7 @@ struct CompensateArgs {
   std::string units;           // of the point file (mm or inch); empty: mm, or what a DMIS file says
   std::string initial_transform;  // T.txt: 4 × 4, CAD → machine (io/transform_file.hpp); empty: identity
   double probe_radius = 0.0;   // in the points' unit
+  bool accept_doubtful_registration = false;  // compensation::RegisterOptions::accept_doubtful
   bool quiet = false;
 };
 int run_compensate(const CompensateArgs& args);
@@ -26,6 +27,7 @@ struct FitArgs {
   std::string units;           // as CompensateArgs
   std::string initial_transform;  // as CompensateArgs
   double probe_radius = 0.0;   // in the points' unit
+  bool accept_doubtful_registration = false;  // as CompensateArgs
   bool quiet = false;
 };
 int run_fit(const FitArgs& args);

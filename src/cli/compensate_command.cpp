@@ -66,9 +66,11 @@ Loaded load(const std::string& cad_path, const std::string& points_path, double 
   return l;
 }
 
-compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Method method, bool quiet) {
+compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Method method, bool accept_doubtful,
+                                              bool quiet) {
   compensation::CompensateOptions o;
   o.method = method;
+  o.accept_doubtful_registration = accept_doubtful;
   o.probe_radius = l.inputs.probe_radius;
   o.registration.initial = l.initial;
   o.progress = Progress{Stopwatch(), quiet};
@@ -109,7 +111,7 @@ int run_compensate(const CompensateArgs& a) {
                                  {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform}});
   const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform);
   const compensation::Method method = a.method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
-  const compensation::CompensationResult r = run_pipeline(l, method, a.quiet);
+  const compensation::CompensationResult r = run_pipeline(l, method, a.accept_doubtful_registration, a.quiet);
   write_outputs(a, l, r);
   return 0;
 }
@@ -121,7 +123,7 @@ int run_fit(const FitArgs& a) {
   io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}},
                                  {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform}});
   const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform);
-  const compensation::CompensationResult r = run_pipeline(l, compensation::Method::Cad, a.quiet);
+  const compensation::CompensationResult r = run_pipeline(l, compensation::Method::Cad, a.accept_doubtful_registration, a.quiet);
   const std::vector<nurbs::Surface> surfaces = compensation::fitted_part_surfaces(r, l.inputs.probe_radius);
   if (surfaces.empty()) {
     throw FitError("no face holds enough points for a fit, so there is no measured surface to write");

@@ -182,6 +182,10 @@ constexpr const char* kInitialTransformHelp =
     "T.txt: where the part roughly is, as a 4 x 4 matrix CAD -> machine (4 lines of 4 numbers, mm; the convention of "
     "--json's transform). Default: the identity, and a coarse alignment (multi-start ICP) when the registration from "
     "it is not credible";
+constexpr const char* kAcceptDoubtfulHelp =
+    "Run on when the registration stays doubtful after the coarse alignment (many tip centres inside the material, "
+    "large residuals): for a part that really deviates from its model by about the probe radius. Without it such a "
+    "run stops with exit status 5";
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -275,6 +279,7 @@ int main(int argc, char** argv) {
   compensate->add_option("--probe-radius", comp.probe_radius, kProbeRadiusHelp)->required();
   compensate->add_option("--units", comp.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
   compensate->add_option("--initial-transform", comp.initial_transform, kInitialTransformHelp);
+  compensate->add_flag("--accept-doubtful-registration", comp.accept_doubtful_registration, kAcceptDoubtfulHelp);
   compensate->add_option("--method", comp.method,
                          "cad (default): register to the offset model, fit, offset along the fitted normal; "
                          "conventional: c - r*(i,j,k)")
@@ -294,6 +299,7 @@ int main(int argc, char** argv) {
   fit->add_option("--probe-radius", fit_args.probe_radius, kProbeRadiusHelp)->required();
   fit->add_option("--units", fit_args.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
   fit->add_option("--initial-transform", fit_args.initial_transform, kInitialTransformHelp);
+  fit->add_flag("--accept-doubtful-registration", fit_args.accept_doubtful_registration, kAcceptDoubtfulHelp);
   fit->add_option("--output", fit_args.output, "ACTUAL.igs or ACTUAL.stp")->required();
   fit->add_option("--json", fit_args.json, "STATS.json as for compensate");
   fit->add_flag("--quiet", fit_args.quiet, "No progress on standard error");

@@ -335,9 +335,14 @@ registration::RegistrationResult register_centres(const PreparedModel& prepared,
                             " found none better. Give a rough alignment with --initial-transform T.txt (4 x 4, CAD -> "
                             "machine), or check the CAD file, the frame and the probe radius");
   }
-  best.notes.push_back("the registration is doubtful: " + verdict.reason + "; " + tried + (moved ? " improved it, but" : "") +
-                       " found none better, so these may be the part's own deviations. If the part is not that far "
-                       "from its model, give a rough alignment with --initial-transform T.txt");
+  const std::string doubtful = "the registration is doubtful: " + verdict.reason + "; " + tried +
+                               (moved ? " improved it but found no credible one" : " found none better");
+  if (!options.accept_doubtful) {
+    throw RegistrationError(doubtful + ". Give a rough alignment with --initial-transform T.txt (4 x 4, CAD -> machine); "
+                            "if the part really deviates from its model by about the probe radius, "
+                            "--accept-doubtful-registration runs on with a warning");
+  }
+  best.notes.push_back(doubtful + ", and was accepted as asked: these may be the part's own deviations, or a wrong pose");
   return best;
 }
 
@@ -645,7 +650,9 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   step("registration", 0.15);
   geometry::Stopwatch clock;
   out.registration = register_centres(
-      prepared, raw, {.icp = options.registration, .max_initial_distance_fraction = options.max_initial_distance_fraction});
+      prepared, raw, {.icp = options.registration,
+                      .max_initial_distance_fraction = options.max_initial_distance_fraction,
+                      .accept_doubtful = options.accept_doubtful_registration});
   out.seconds.registration = clock.restart();
 
   step("fitting", 0.35);

@@ -40,6 +40,7 @@ class Trim final : public nurbs::ParameterRegion {
   struct Segment {
     double u0, v0, u1, v1;
   };
+  void close_loops();
   std::vector<BoundaryCurve> curves_;
   std::vector<Segment> segments_;
   // Segments grouped by horizontal band of v, so a membership test only crosses the segments of its band.

@@ -117,6 +117,10 @@ struct RegisterOptions {
   // Points whose first closest point on the model is farther than this fraction of the model's size are
   // "nowhere near the model" (wrong file, frame or unit): the run stops with an InputError.
   double max_initial_distance_fraction = 0.1;
+  // A registration that stays doubtful after the coarse alignment (registration/credibility.hpp) is refused with a
+  // RegistrationError unless this is set: the checks cannot tell a wrong pose from a part that deviates from its
+  // model by about r, and only the user knows which it is. Accepted, it comes back with a warning in its notes.
+  bool accept_doubtful = false;
 };
 
 // The raw centres registered to the prepared offset model. Throws InputError when the points are nowhere near
@@ -219,6 +223,7 @@ struct CompensateOptions {
   double probe_radius = 0.0;  // mm, > 0
   registration::RegistrationOptions registration;
   double max_initial_distance_fraction = 0.1;  // as RegisterOptions
+  bool accept_doubtful_registration = false;   // as RegisterOptions::accept_doubtful
   fitting::OffsetOptions offset;
   FitOptions fit;
   // Called at the start of each step with the fraction of the run done (0–1); may be empty.
