@@ -352,6 +352,14 @@ ModelPoint ModelLocator::closest_point(const Point3& query) const {
   return best;
 }
 
+ModelPoint ModelLocator::closest_point_on_other_faces(const Point3& query, int excluded, double limit) const {
+  ModelPoint best;
+  best.distance = limit;
+  if (nodes_.empty() || !query.allFinite()) return best;
+  search(query, best, excluded);
+  return best;
+}
+
 ModelPoint ModelLocator::closest_point(const Point3& query, const ModelPoint& hint, HintedSearch mode) const {
   if (!hint.ok() || hint.face < 0 || hint.face >= static_cast<int>(faces_.size()) || !query.allFinite()) {
     return closest_point(query);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <string_view>
 
 #include "probecomp/compensation/contact.hpp"
@@ -14,6 +15,7 @@
 #include "probecomp/compensation/outliers.hpp"
 #include "probecomp/error.hpp"
 #include "probecomp/geometry/neighbours.hpp"
+#include "probecomp/geometry/parallel.hpp"
 #include "probecomp/geometry/point_set.hpp"
 #include "probecomp/geometry/statistics.hpp"
 #include "probecomp/geometry/stopwatch.hpp"
@@ -228,6 +230,7 @@ const char* to_string(PointStatus s) {
     case PointStatus::Ok: return "ok";
     case PointStatus::Outlier: return "outlier";
     case PointStatus::Edge: return "edge";
+    case PointStatus::DoubleContact: return "double-contact";
     case PointStatus::FewPoints: return "few-points";
     case PointStatus::NotOnModel: return "not-on-model";
     case PointStatus::Failed: return "failed";
@@ -269,11 +272,13 @@ PreparedModel prepare_model(const cad::Model& model, double probe_radius, std::s
   const geometry::Stopwatch clock;
   PreparedModel p;
   p.probe_radius = probe_radius;
-  p.nominal = model;  // a copy: the material side is decided into its faces' `outward`
-  p.material = cad::decide_material_side(p.nominal, raw, approach_normals, options.initial);
-  auto offset = std::make_unique<cad::OffsetModel>(cad::offset_model(p.nominal, probe_radius, options.offset));
+  auto nominal = std::make_unique<cad::Model>(model);  // a copy: the material side is decided into its faces' `outward`
+  p.material = cad::decide_material_side(*nominal, raw, approach_normals, options.initial);
+  auto offset = std::make_unique<cad::OffsetModel>(cad::offset_model(*nominal, probe_radius, options.offset));
   p.locator = std::make_unique<cad::ModelLocator>(offset->model);
+  p.nominal_locator = std::make_unique<cad::ModelLocator>(*nominal);
   p.offset = std::move(offset);
+  p.nominal = std::move(nominal);
   p.seconds = clock.seconds();
   return p;
 }
@@ -346,20 +351,60 @@ registration::RegistrationResult register_centres(const PreparedModel& prepared,
   return best;
 }
 
+namespace {
+
+// A tip against a second face: its centre within this much (mm) as near that face's offset as its own, at most ...
+double contact_tolerance(double noise, double probe_radius) {
+  // Four noise σ: a tip on one face alone is rarely that close to a second by chance. At most 2 % of r: past
+  // that, the second face's foot near a smooth continuation of the first (a tangent fillet) would be within
+  // reach too, at an angle between their normals of up to √(2·tol/r) = 11°, under kMinContactAngle.
+  constexpr double kNoiseSigmas = 4.0;
+  constexpr double kMaxFractionOfRadius = 0.02;
+  constexpr double kFloor = 1e-3;
+  return std::min(std::max(kNoiseSigmas * noise, kFloor), kMaxFractionOfRadius * probe_radius);
+}
+// ... and with normals this far apart (degrees): two faces meeting at a concave edge, not one continuing smoothly.
+constexpr double kMinContactAngle = 15.0;
+
+}  // namespace
+
+std::vector<int> second_contacts(const PreparedModel& prepared, std::span<const Point3> raw,
+                                 const registration::RegistrationResult& registration) {
+  const double tol = contact_tolerance(registration.scale, prepared.probe_radius);
+  const double min_cos = std::cos(kMinContactAngle * std::numbers::pi / 180.0);
+  const geometry::RigidTransform to_cad = registration.transform.inverse();
+  return geometry::parallel_map<int>(raw.size(), 64, [&](std::size_t k) {
+    const registration::PointMatch& m = registration.matches[k];
+    if (!m.ok() || m.on_edge || !raw[k].allFinite()) return -1;
+    // On the nominal model: the tip's centre is r + its deviation from the face it touches. The other face's
+    // contact direction is from its foot to the centre (its normal inside the face; across a convex edge shared
+    // with the first face, nearly the first face's normal, which is one contact, not two).
+    const Point3 c = to_cad * raw[k];
+    const cad::ModelPoint other =
+        prepared.nominal_locator->closest_point_on_other_faces(c, m.face, std::abs(prepared.probe_radius + m.distance) + tol);
+    if (other.face < 0 || !other.ok()) return -1;
+    const Vector3 n = prepared.nominal_locator->outward_normal(m.face, m.u, m.v);
+    return n.dot((c - other.point).normalized()) < min_cos ? other.face : -1;
+  });
+}
+
 FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
                     const registration::RegistrationResult& registration, const FitOptions& options,
                     const StepProgress& progress) {
   const geometry::Stopwatch clock;
-  const cad::Model& work = prepared.nominal;
+  const cad::Model& work = *prepared.nominal;
   const geometry::RigidTransform& T = registration.transform;
-  // Points by face (their correspondences); edge points count in their face's report but are never fitted.
+  FitResult out;
+  out.second_contact = second_contacts(prepared, raw, registration);
+  // Points by face (their correspondences); edge and double-contact points count in their face's report but are
+  // never fitted.
   std::map<int, FaceFit> by_face;
   for (std::size_t k = 0; k < raw.size(); ++k) {
     const registration::PointMatch& m = registration.matches[k];
     if (!m.ok() || !raw[k].allFinite()) continue;
     FaceFit& ff = by_face[m.face];
     ++ff.report.points;
-    if (!m.on_edge) ff.members.push_back(k);
+    if (!m.on_edge && out.second_contact[k] < 0) ff.members.push_back(k);
   }
 
   std::size_t done = 0;
@@ -460,7 +505,6 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     done += members.size();
     if (progress) progress(static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(raw.size(), 1)));
   }
-  FitResult out;
   out.faces.reserve(by_face.size());
   for (auto& [f, ff] : by_face) out.faces.push_back(std::move(ff));
   out.seconds = clock.seconds();
@@ -470,33 +514,61 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
 std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, std::span<const Point3> raw,
                                                 const registration::RegistrationResult& registration,
                                                 const FitResult& fits) {
-  const cad::Model& work = prepared.nominal;
+  const cad::Model& work = *prepared.nominal;
   const double r = prepared.probe_radius;
   const geometry::RigidTransform& T = registration.transform;
   std::vector<CompensatedPoint> out(raw.size());
-  // Edge points: towards the edge.
-  for (std::size_t k = 0; k < raw.size(); ++k) {
-    const registration::PointMatch& m = registration.matches[k];
-    if (!m.ok() || !raw[k].allFinite()) continue;
-    CompensatedPoint& c = out[k];
-    c.face = work.faces[static_cast<std::size_t>(m.face)].index;
-    if (m.on_edge) {
-      const Point3 edge = T * nurbs::evaluate(work.faces[static_cast<std::size_t>(m.face)].surface, m.u, m.v);
-      c.status = PointStatus::Edge;
-      c.normal = (raw[k] - edge).normalized();
-      c.contact = raw[k] - r * c.normal;
-      c.uncertainty = registration.scale;
+  // Points no fit stands behind (past an edge, against two faces, on a face with too few points): the tip touched
+  // the nominal part where it is nearest to the registered centre, on whichever face that is. Offset towards that
+  // point (along its face's normal inside a face, towards the edge past one); the deviation is the centre's
+  // distance from it less r.
+  const geometry::RigidTransform to_cad = T.inverse();
+  std::vector<char> unfitted(raw.size(), 0);
+  for (const FaceFit& ff : fits.faces) {
+    if (!ff.report.fitted) {
+      for (std::size_t k : ff.members) unfitted[k] = 1;
     }
   }
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    const registration::PointMatch& m = registration.matches[k];
+    if (m.ok() && (m.on_edge || (!fits.second_contact.empty() && fits.second_contact[k] >= 0))) unfitted[k] = 1;
+  }
+  tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
+    if (!unfitted[k] || !raw[k].allFinite()) return;
+    const registration::PointMatch& m = registration.matches[k];
+    cad::ModelPoint hint;
+    hint.status = m.status;
+    hint.face = m.face;
+    hint.u = m.u;
+    hint.v = m.v;
+    const Point3 x = to_cad * raw[k];
+    const cad::ModelPoint foot = prepared.nominal_locator->closest_point(x, hint);
+    CompensatedPoint& c = out[k];
+    if (!foot.ok() || !((x - foot.point).norm() > 0.0)) {
+      c.status = PointStatus::Failed;
+      return;
+    }
+    const Vector3 towards = (foot.distance < 0.0 ? -1.0 : 1.0) * (x - foot.point).normalized();
+    c.status = m.on_edge ? PointStatus::Edge
+               : (!fits.second_contact.empty() && fits.second_contact[k] >= 0) ? PointStatus::DoubleContact
+                                                                              : PointStatus::FewPoints;
+    c.face = work.faces[static_cast<std::size_t>(foot.face)].index;
+    c.normal = T.linear() * towards;
+    c.contact = raw[k] - r * c.normal;
+    c.deviation = foot.distance - (foot.distance < 0.0 ? -r : r);
+    c.uncertainty = registration.scale;
+  });
   for (const FaceFit& ff : fits.faces) {
+    if (!ff.report.fitted) continue;
     const cad::Face& face = work.faces[static_cast<std::size_t>(ff.face)];
     const std::vector<std::size_t>& members = ff.members;
-    if (ff.report.fitted) {
+    {
       std::vector<Point3> pts(members.size());
       for (std::size_t i = 0; i < members.size(); ++i) pts[i] = raw[members[i]];
       const std::vector<ContactPoint> contacts = contact_points(ff.fit->surface, face.outward, r, pts, ff.params);
       for (std::size_t i = 0; i < members.size(); ++i) {
         CompensatedPoint& c = out[members[i]];
+        c.face = face.index;
         if (!contacts[i].ok()) {
           c.status = PointStatus::Failed;
           continue;
@@ -506,27 +578,15 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
         c.normal = contacts[i].normal;
         c.uncertainty = std::hypot(ff.fit->noise_sigma * std::sqrt(ff.fit->variance_factor[i]), ff.fit->misfit[i]);
       }
-    } else {
-      // Too few points (or a fit that could not be made): the registered nominal normal.
-      const Eigen::Matrix3d R = T.linear();
-      for (std::size_t i = 0; i < members.size(); ++i) {
-        CompensatedPoint& c = out[members[i]];
-        const nurbs::UnitNormal n = nurbs::unit_normal(face.surface, ff.params[i].u, ff.params[i].v);
-        c.status = PointStatus::FewPoints;
-        c.normal = R * (static_cast<double>(face.outward) * n.n);
-        c.contact = raw[members[i]] - r * c.normal;
-        c.uncertainty = registration.scale;
-      }
     }
   }
 
-  // Deviations: Newton from the correspondence's (u, v) (nominal and offset faces share their parametrisation),
-  // with the face's global search where Newton fails.
-  const geometry::RigidTransform to_cad = T.inverse();
+  // Deviations of the fitted points: Newton from the correspondence's (u, v) (nominal and offset faces share their
+  // parametrisation), with the face's global search where Newton fails.
   std::vector<char> retry(raw.size(), 0);
   tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
     CompensatedPoint& c = out[k];
-    if (!c.computed()) return;
+    if (!c.computed() || unfitted[k]) return;
     const registration::PointMatch& m = registration.matches[k];
     const cad::Face& face = work.faces[static_cast<std::size_t>(m.face)];
     const Point3 x = to_cad * c.contact;

@@ -76,6 +76,9 @@ class ModelLocator {
                                          HintedSearch search = HintedSearch::Exact) const;
   [[nodiscard]] std::vector<ModelPoint> closest_points(std::span<const Point3> queries, std::span<const ModelPoint> hints,
                                                        HintedSearch search = HintedSearch::Exact) const;
+  // The closest point on any face but `excluded` that is nearer than `limit` (mm); face −1 when there is none. A
+  // tip touching a second face (a concave corner) has one there within the noise of its first.
+  [[nodiscard]] ModelPoint closest_point_on_other_faces(const Point3& query, int excluded, double limit) const;
   // The outward unit normal of face `face` at (u, v).
   [[nodiscard]] Vector3 outward_normal(int face, double u, double v) const;
 

@@ -37,14 +37,17 @@ enum class PointStatus {
   Ok,
   Outlier,     // the fitted surface's residual is beyond the outlier bound: compensated, not trusted
   Edge,        // the tip touched a face's edge (foot point on a trim or domain edge): offset towards that edge
+  DoubleContact,  // the tip sat against two faces at once (a concave corner, a fillet tighter than r): which one
+                  // stopped it is unknown; offset along its face's registered nominal normal, not fitted
   FewPoints,   // its face had too few points for a fit: offset along the registered nominal normal
   NotOnModel,  // no closest point on the model (or not a finite point): nothing computed, fields empty
   Failed,      // the projection on the fitted surface failed: nothing computed, fields empty
 };
 [[nodiscard]] const char* to_string(PointStatus s);
 // Every status, in the order above (for counts and reports).
-inline constexpr PointStatus kPointStatuses[] = {PointStatus::Ok,        PointStatus::Outlier,    PointStatus::Edge,
-                                                 PointStatus::FewPoints, PointStatus::NotOnModel, PointStatus::Failed};
+inline constexpr PointStatus kPointStatuses[] = {
+    PointStatus::Ok,        PointStatus::Outlier,    PointStatus::Edge,  PointStatus::DoubleContact,
+    PointStatus::FewPoints, PointStatus::NotOnModel, PointStatus::Failed};
 
 struct CompensatedPoint {
   PointStatus status = PointStatus::NotOnModel;
@@ -98,10 +101,14 @@ struct PrepareOptions {
 // both live on the heap so that a move keeps that reference valid.
 struct PreparedModel {
   double probe_radius = 0.0;
-  cad::Model nominal;                        // the input model, each face's `outward` its decided material side
+  // The input model, each face's `outward` its decided material side (held by pointer, as the offset model is,
+  // so that the locators over them stay valid when the prepared model moves).
+  std::unique_ptr<const cad::Model> nominal;
   std::vector<cad::MaterialSide> material;   // per face of `nominal`: what decided it
   std::unique_ptr<const cad::OffsetModel> offset;    // every face of `nominal` offset by +r
   std::unique_ptr<const cad::ModelLocator> locator;  // closest points on offset->model
+  // Closest points on the nominal model: where a tip of radius r whose centre is known touches the part.
+  std::unique_ptr<const cad::ModelLocator> nominal_locator;
   double seconds = 0.0;
 };
 
@@ -164,14 +171,23 @@ struct FaceFit {
 };
 
 struct FitResult {
-  // Every face that holds points, by position. Points whose correspondence is on a face's edge count in its
-  // report but are never fitted (they are compensated towards the edge).
+  // Every face that holds points, by position. Points whose correspondence is on a face's edge, or whose tip
+  // touched a second face, count in its report but are never fitted.
   std::vector<FaceFit> faces;
+  // Per input point: the second face (position) its tip touched within the contact tolerance, or −1.
+  std::vector<int> second_contact;
   double seconds = 0.0;
 };
 
 // Called with the fraction of the step done (0–1); may be empty.
 using StepProgress = std::function<void(double fraction)>;
+
+// Per raw centre: the second face (position) the tip also touched, or −1. A second face counts when the centre is
+// within the contact tolerance (4 σ of the registration's residuals, 1 µm to 2 % of r) as near its offset as its
+// own face's, and their normals are over 15° apart: a concave corner, not a smooth continuation. Edge points
+// (whose foot is already past their face) and points without a correspondence have none.
+[[nodiscard]] std::vector<int> second_contacts(const PreparedModel& prepared, std::span<const Point3> raw_centres,
+                                               const registration::RegistrationResult& registration);
 
 [[nodiscard]] FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw_centres,
                                   const registration::RegistrationResult& registration, const FitOptions& options = {},
