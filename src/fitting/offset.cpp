@@ -198,32 +198,42 @@ OffsetResult fit_offset(const Surface& s, const OffsetDistance& distance, double
   for (int round = 0; round < options.max_rounds; ++round) {
     const std::vector<double> bu = base.U().breakpoints();
     const std::vector<double> bv = base.V().breakpoints();
-    // Enough samples per span that the fit is determined even for one span of high degree.
-    const int per_u = std::max(options.samples_per_span, (base.num_u() + static_cast<int>(bu.size()) - 1) /
-                                                             static_cast<int>(bu.size() - 1));
-    const int per_v = std::max(options.samples_per_span, (base.num_v() + static_cast<int>(bv.size()) - 1) /
-                                                             static_cast<int>(bv.size() - 1));
-    const std::vector<double> tu = span_parameters(bu, per_u);
-    const std::vector<double> tv = span_parameters(bv, per_v);
-    std::vector<Point3> points(tu.size() * tv.size());
-    std::vector<char> bad(points.size(), 0);
-    const nurbs::GridRows sample_rows(s, tv, 1);
-    tbb::parallel_for(std::size_t{0}, tu.size(), [&](std::size_t a) {
-      thread_local std::vector<nurbs::SurfaceD2> sd;
-      sd.resize(tv.size());
-      sample_rows.row(tu[a], sd);
-      for (std::size_t b = 0; b < tv.size(); ++b) {
-        const std::size_t k = a * tv.size() + b;
-        const TrueOffset o = offset_point(s, distance, sd[b], tu[a], tv[b]);
-        points[k] = o.point;
-        bad[k] = o.degenerate;
+    // Enough samples per span that the fit is determined even for one span of high degree. Where a long span
+    // carries more basis functions than that (a knot of high multiplicity before it: the impeller's degree-5
+    // blades), the Schoenberg–Whitney conditions fail; p + 2 samples per span, p + 1 inside it, always meet them.
+    int per_u = std::max(options.samples_per_span, (base.num_u() + static_cast<int>(bu.size()) - 1) /
+                                                       static_cast<int>(bu.size() - 1));
+    int per_v = std::max(options.samples_per_span, (base.num_v() + static_cast<int>(bv.size()) - 1) /
+                                                       static_cast<int>(bv.size() - 1));
+    std::optional<Surface> fitted;
+    for (int attempt = 0; attempt < 2 && !fitted; ++attempt) {
+      if (attempt == 1) {
+        if (per_u >= base.p() + 2 && per_v >= base.q() + 2) break;
+        per_u = std::max(per_u, base.p() + 2);
+        per_v = std::max(per_v, base.q() + 2);
       }
-    });
-    if (std::any_of(bad.begin(), bad.end(), [](char c) { return c != 0; })) {
-      result.status = OffsetResult::Status::Degenerate;
-      return result;
+      const std::vector<double> tu = span_parameters(bu, per_u);
+      const std::vector<double> tv = span_parameters(bv, per_v);
+      std::vector<Point3> points(tu.size() * tv.size());
+      std::vector<char> bad(points.size(), 0);
+      const nurbs::GridRows sample_rows(s, tv, 1);
+      tbb::parallel_for(std::size_t{0}, tu.size(), [&](std::size_t a) {
+        thread_local std::vector<nurbs::SurfaceD2> sd;
+        sd.resize(tv.size());
+        sample_rows.row(tu[a], sd);
+        for (std::size_t b = 0; b < tv.size(); ++b) {
+          const std::size_t k = a * tv.size() + b;
+          const TrueOffset o = offset_point(s, distance, sd[b], tu[a], tv[b]);
+          points[k] = o.point;
+          bad[k] = o.degenerate;
+        }
+      });
+      if (std::any_of(bad.begin(), bad.end(), [](char c) { return c != 0; })) {
+        result.status = OffsetResult::Status::Degenerate;
+        return result;
+      }
+      fitted = fit_tensor_grid(base, tu, tv, points);
     }
-    const std::optional<Surface> fitted = fit_tensor_grid(base, tu, tv, points);
     ++result.rounds;
     if (!fitted) {
       result.status = OffsetResult::Status::Degenerate;

@@ -13,6 +13,7 @@
 
 #include "probecomp/nurbs/closest_point.hpp"
 #include "probecomp/nurbs/constructors.hpp"
+#include "probecomp/nurbs/degree_elevation.hpp"
 #include "probecomp/occt/convert.hpp"
 #include "support/test_surfaces.hpp"
 
@@ -109,6 +110,31 @@ TEST_P(FreeFormOffset, WithinTheToleranceOfOpenCascadesOffsetSurface) {
 
 // The surface's tightest curvature radius is 1.3 mm on the + side: 1 mm offsets need several refinements.
 INSTANTIATE_TEST_SUITE_P(Distances, FreeFormOffset, ::testing::Values(1.0, -1.0, 0.5));
+
+// Degree 5 with knots of multiplicity 3 and 4 before long spans (as on the impeller's blades): more basis functions
+// live on the last span than a few samples per span determine. Against OpenCASCADE's exact offset.
+TEST(OffsetSurface, HighDegreeWithMultipleKnotsBeforeALongSpan) {
+  const Surface cubic = testing::random_rational_surface(23, {.nu = 4, .nv = 4, .height = 4.0});  // one span
+  const nurbs::Domain d = cubic.domain();
+  auto at = [&](double f) { return d.u0 + f * (d.u1 - d.u0); };
+  // Short spans first (as a deformation's refinement makes them), then 0.25 three times and 0.5 four times: the
+  // last span carries four basis functions of its own.
+  const Surface s = nurbs::refine_knots_u(nurbs::elevate_degree_v(nurbs::elevate_degree_u(cubic, 2), 2),
+                                          {at(0.05), at(0.1), at(0.15), at(0.2), at(0.25), at(0.25), at(0.25),
+                                           at(0.5), at(0.5), at(0.5), at(0.5)});
+  ASSERT_EQ(s.p(), 5);
+  const OffsetResult r = offset_surface(s, 0.5);
+  ASSERT_EQ(r.status, OffsetResult::Status::OK) << to_string(r.status) << " deviation " << r.deviation;
+  const Handle(Geom_OffsetSurface) reference = new Geom_OffsetSurface(occt::to_occt(s), 0.5);
+  double worst = 0.0;
+  for (const auto& [u, v] : random_parameters(s, 2000, 4)) {
+    const gp_Pnt o = reference->Value(u, v);
+    const nurbs::ClosestPointResult foot = nurbs::refine_closest_point(r.surface, Point3(o.X(), o.Y(), o.Z()), u, v);
+    ASSERT_TRUE(foot.ok());
+    worst = std::max(worst, foot.distance);
+  }
+  EXPECT_LE(worst, 1e-4);
+}
 
 TEST(OffsetSurface, FreeFormFoldsExactlyWhenTheOffsetExceedsTheCurvatureRadiusOnItsSide) {
   const Surface s = testing::random_rational_surface(22, {.nu = 9, .nv = 8, .height = 15.0});
