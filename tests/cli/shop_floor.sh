@@ -80,9 +80,9 @@ check "grep -q '\"warnings\": \[\"the registration from the given start was not 
 simulate "$W/far" 0,0,0,35,0,0
 expect_error "initial-transform" "$W/far/out.csv" \
   "$P" compensate --cad "$HPDC" --points "$W/far/raw.csv" --probe-radius 1 --output "$W/far/out.csv" --quiet
-check "[ \$(status_of '$P' compensate --cad '$HPDC' --points '$W/far/raw.csv' --probe-radius 1 --quiet) -eq 5 ]" "far: exit 5"
-check "'$P' compensate --cad '$HPDC' --points '$W/far/raw.csv' --probe-radius 1 --quiet 2>&1 >/dev/null | grep -q 'doubtful.*--accept-doubtful-registration'" \
-  "far: the refusal names --accept-doubtful-registration"
+# expect_error leaves the run's exit status in rc and its message in $W/stderr.
+check "[ $rc -eq 5 ]" "far: exit 5"
+check "grep -q 'doubtful.*--accept-doubtful-registration' '$W/stderr'" "far: the refusal names --accept-doubtful-registration"
 printf '# 30 degrees about x\n1 0 0 0\n0 0.8660254037844387 -0.5 0\n0, 0.5, 0.8660254037844387, 0\n0 0 0 1\n' >"$W/far/T.txt"
 "$P" compensate --cad "$HPDC" --points "$W/far/raw.csv" --probe-radius 1 --initial-transform "$W/far/T.txt" \
   --output "$W/far/out.csv" --json "$W/far/out.json" --quiet || { echo "FAIL: --initial-transform"; fail=1; }
