@@ -523,6 +523,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
   // point (along its face's normal inside a face, towards the edge past one); the deviation is the centre's
   // distance from it less r.
   const geometry::RigidTransform to_cad = T.inverse();
+  auto double_contact = [&](std::size_t k) { return !fits.second_contact.empty() && fits.second_contact[k] >= 0; };
   std::vector<char> unfitted(raw.size(), 0);
   for (const FaceFit& ff : fits.faces) {
     if (!ff.report.fitted) {
@@ -531,7 +532,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
   }
   for (std::size_t k = 0; k < raw.size(); ++k) {
     const registration::PointMatch& m = registration.matches[k];
-    if (m.ok() && (m.on_edge || (!fits.second_contact.empty() && fits.second_contact[k] >= 0))) unfitted[k] = 1;
+    if (m.ok() && (m.on_edge || double_contact(k))) unfitted[k] = 1;
   }
   tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
     if (!unfitted[k] || !raw[k].allFinite()) return;
@@ -549,9 +550,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
       return;
     }
     const Vector3 towards = (foot.distance < 0.0 ? -1.0 : 1.0) * (x - foot.point).normalized();
-    c.status = m.on_edge ? PointStatus::Edge
-               : (!fits.second_contact.empty() && fits.second_contact[k] >= 0) ? PointStatus::DoubleContact
-                                                                              : PointStatus::FewPoints;
+    c.status = m.on_edge ? PointStatus::Edge : double_contact(k) ? PointStatus::DoubleContact : PointStatus::FewPoints;
     c.face = work.faces[static_cast<std::size_t>(foot.face)].index;
     c.normal = T.linear() * towards;
     c.contact = raw[k] - r * c.normal;
@@ -562,22 +561,20 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
     if (!ff.report.fitted) continue;
     const cad::Face& face = work.faces[static_cast<std::size_t>(ff.face)];
     const std::vector<std::size_t>& members = ff.members;
-    {
-      std::vector<Point3> pts(members.size());
-      for (std::size_t i = 0; i < members.size(); ++i) pts[i] = raw[members[i]];
-      const std::vector<ContactPoint> contacts = contact_points(ff.fit->surface, face.outward, r, pts, ff.params);
-      for (std::size_t i = 0; i < members.size(); ++i) {
-        CompensatedPoint& c = out[members[i]];
-        c.face = face.index;
-        if (!contacts[i].ok()) {
-          c.status = PointStatus::Failed;
-          continue;
-        }
-        c.status = ff.trusted[i] ? PointStatus::Ok : PointStatus::Outlier;
-        c.contact = contacts[i].contact;
-        c.normal = contacts[i].normal;
-        c.uncertainty = std::hypot(ff.fit->noise_sigma * std::sqrt(ff.fit->variance_factor[i]), ff.fit->misfit[i]);
+    std::vector<Point3> pts(members.size());
+    for (std::size_t i = 0; i < members.size(); ++i) pts[i] = raw[members[i]];
+    const std::vector<ContactPoint> contacts = contact_points(ff.fit->surface, face.outward, r, pts, ff.params);
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      CompensatedPoint& c = out[members[i]];
+      c.face = face.index;
+      if (!contacts[i].ok()) {
+        c.status = PointStatus::Failed;
+        continue;
       }
+      c.status = ff.trusted[i] ? PointStatus::Ok : PointStatus::Outlier;
+      c.contact = contacts[i].contact;
+      c.normal = contacts[i].normal;
+      c.uncertainty = std::hypot(ff.fit->noise_sigma * std::sqrt(ff.fit->variance_factor[i]), ff.fit->misfit[i]);
     }
   }
 

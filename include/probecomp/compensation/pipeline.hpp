@@ -38,7 +38,7 @@ enum class PointStatus {
   Outlier,     // the fitted surface's residual is beyond the outlier bound: compensated, not trusted
   Edge,        // the tip touched a face's edge (foot point on a trim or domain edge): offset towards that edge
   DoubleContact,  // the tip sat against two faces at once (a concave corner, a fillet tighter than r): which one
-                  // stopped it is unknown; offset along its face's registered nominal normal, not fitted
+                  // stopped it is unknown; not fitted, offset towards the nominal part's point nearest to it
   FewPoints,   // its face had too few points for a fit: offset along the registered nominal normal
   NotOnModel,  // no closest point on the model (or not a finite point): nothing computed, fields empty
   Failed,      // the projection on the fitted surface failed: nothing computed, fields empty
@@ -182,9 +182,10 @@ struct FitResult {
 // Called with the fraction of the step done (0–1); may be empty.
 using StepProgress = std::function<void(double fraction)>;
 
-// Per raw centre: the second face (position) the tip also touched, or −1. A second face counts when the centre is
-// within the contact tolerance (4 σ of the registration's residuals, 1 µm to 2 % of r) as near its offset as its
-// own face's, and their normals are over 15° apart: a concave corner, not a smooth continuation. Edge points
+// Per raw centre: the second face (position) the tip also touched, or −1. A second face counts when the registered
+// centre is as near it as to its own face (r plus the deviation there) within the contact tolerance (4 σ of the
+// registration's residuals, 1 µm to 2 % of r), and the directions from the two feet to the centre are over 15°
+// apart: a concave corner, not a smooth continuation. Edge points
 // (whose foot is already past their face) and points without a correspondence have none.
 [[nodiscard]] std::vector<int> second_contacts(const PreparedModel& prepared, std::span<const Point3> raw_centres,
                                                const registration::RegistrationResult& registration);
