@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <limits>
 #include <random>
 #include <type_traits>
 
@@ -108,6 +109,36 @@ INSTANTIATE_TEST_SUITE_P(CadFiles, ProjectOnCadFile,
                            for (char& c : n) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
                            return n;
                          });
+
+// The search with one face left out (a tip's second contact) against OpenCASCADE's distance to all the other faces:
+// the face nearest each point is left out, and within a limit nothing farther is reported.
+TEST(ModelLocator, ClosestPointOnOtherFacesEqualsOpenCascadeWithoutThatFace) {
+  const std::filesystem::path path = kCadDir / "asitus_wavy-cube.stp";
+  const Model model = read_model(path);
+  const ModelLocator locator(model);
+  const std::vector<TopoDS_Face> faces = testing::faces_of(testing::read_with_occt(path));
+  const std::vector<Point3> queries = points_around(model, 40, 7);
+  for (std::size_t k = 0; k < queries.size(); ++k) {
+    const Point3& q = queries[k];
+    const ModelPoint nearest = locator.closest_point(q);
+    ASSERT_TRUE(nearest.ok());
+    TopoDS_Compound others;
+    BRep_Builder builder;
+    builder.MakeCompound(others);
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      if (static_cast<int>(f) != nearest.face) builder.Add(others, faces[f]);
+    }
+    BRepExtrema_DistShapeShape dist(BRepBuilderAPI_MakeVertex(gp_Pnt(q.x(), q.y(), q.z())).Vertex(), others);
+    ASSERT_TRUE(dist.IsDone());
+    const ModelPoint other = locator.closest_point_on_other_faces(q, nearest.face, std::numeric_limits<double>::infinity());
+    ASSERT_TRUE(other.ok()) << k;
+    EXPECT_NE(other.face, nearest.face);
+    EXPECT_NEAR(std::abs(other.distance), dist.Value(), 1e-6) << "point " << k;
+    EXPECT_GE(std::abs(other.distance), std::abs(nearest.distance) - 1e-12);
+    const ModelPoint none = locator.closest_point_on_other_faces(q, nearest.face, 0.5 * dist.Value());
+    EXPECT_EQ(none.face, -1) << "point " << k;
+  }
+}
 
 TEST(ModelLocator, SameResultWithOneAndTwoThreads) {
   const Model model = read_model(kCadDir / "gismo_hammer.iges");
