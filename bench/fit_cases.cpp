@@ -22,10 +22,11 @@ int main(int argc, char** argv) {
   const int seeds = argc > 3 ? std::atoi(argv[3]) : 1;
   double sum_centre = 0, sum_std = 0, sum_max = 0, sum_mean = 0, sum_cov = 0, min_region = 100;
   for (int s = 1; s <= seeds; ++s) {
-    studies::FreeformStudyOptions o;
+    studies::FreeformStudyOptions o = which == "random"       ? studies::scattered_points(6000)
+                                      : which == "random3000" ? studies::scattered_points(3000)
+                                                              : studies::FreeformStudyOptions{};
     o.seed = s;
     o.noise_sigma = sigma;
-    if (which == "random" || which == "random3000") { o.random_points = which == "random" ? 6000 : 3000; o.shuffle = true; o.approach_normals = false; }
     if (which == "steep") o.steep_dent = true;
     // REPEATS=f: a fraction f of the points recorded twice (REMEASURED=1: a second touch with its own noise).
     if (const char* f = std::getenv("REPEATS")) o.repeated_fraction = std::atof(f);

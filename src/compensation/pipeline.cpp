@@ -479,10 +479,8 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     ff.trusted.resize(members.size());
     // Trusted: what the last fit says (a point taken back or left out after it keeps the last fit's verdict).
     for (std::size_t i = 0; i < members.size(); ++i) ff.trusted[i] = !outlier[position[i]];
-    if (fit && fit->fitted()) per_member(*fit, position);
-    ff.params.resize(members.size());
-    for (std::size_t i = 0; i < members.size(); ++i) ff.params[i] = params[position[i]];
     if (rep.fitted) {
+      per_member(*fit, position);
       rep.fit_status = fit->status;
       rep.stop_reason = fit_stop_reason(*fit, options.surface);
       rep.control_points = fit->control_points;
@@ -493,14 +491,18 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       rep.log10_smoothing = fit->log10_smoothing;
       rep.centre_surface = fit->surface;
       ff.params = fit->params;
-    } else if (fit) {
-      rep.fit_status = fit->status;
-      rep.stop_reason = fit_stop_reason(*fit, options.surface) + kOffsetAlongNominal;
-      fit.reset();
     } else {
-      rep.stop_reason = kNotFitted + std::to_string(pts.size()) + " points off the edges for " +
-                        std::to_string(start.num_u() * start.num_v()) + " control points (" + mm(needed) +
-                        " needed)" + kOffsetAlongNominal;
+      ff.params.resize(members.size());
+      for (std::size_t i = 0; i < members.size(); ++i) ff.params[i] = params[position[i]];
+      if (fit) {
+        rep.fit_status = fit->status;
+        rep.stop_reason = fit_stop_reason(*fit, options.surface) + kOffsetAlongNominal;
+        fit.reset();
+      } else {
+        rep.stop_reason = kNotFitted + std::to_string(pts.size()) + " points off the edges for " +
+                          std::to_string(start.num_u() * start.num_v()) + " control points (" + mm(needed) +
+                          " needed)" + kOffsetAlongNominal;
+      }
     }
     done += members.size();
     if (progress) progress(static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(raw.size(), 1)));
@@ -524,15 +526,13 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
   // distance from it less r.
   const geometry::RigidTransform to_cad = T.inverse();
   auto double_contact = [&](std::size_t k) { return !fits.second_contact.empty() && fits.second_contact[k] >= 0; };
+  // Every point with a correspondence but not in a fitted face's fit (edge and double-contact points never are).
   std::vector<char> unfitted(raw.size(), 0);
+  for (std::size_t k = 0; k < raw.size(); ++k) unfitted[k] = registration.matches[k].ok();
   for (const FaceFit& ff : fits.faces) {
-    if (!ff.report.fitted) {
-      for (std::size_t k : ff.members) unfitted[k] = 1;
+    if (ff.report.fitted) {
+      for (std::size_t k : ff.members) unfitted[k] = 0;
     }
-  }
-  for (std::size_t k = 0; k < raw.size(); ++k) {
-    const registration::PointMatch& m = registration.matches[k];
-    if (m.ok() && (m.on_edge || double_contact(k))) unfitted[k] = 1;
   }
   tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
     if (!unfitted[k] || !raw[k].allFinite()) return;

@@ -9,6 +9,14 @@
 
 namespace probecomp::studies {
 
+FreeformStudyOptions scattered_points(int n) {
+  FreeformStudyOptions o;
+  o.random_points = n;
+  o.shuffle = true;
+  o.approach_normals = false;
+  return o;
+}
+
 FreeformStudyResult run_freeform_study(const FreeformStudyOptions& options) {
   FreeformStudyResult out;
   out.freeform = simulation::paper_freeform_case(options.reversed);

@@ -44,11 +44,7 @@ TEST(Pipeline, FreeformCaseWithAnotherNoiseDrawMeetsTheBars) {
 }
 
 TEST(Pipeline, RandomShuffledPointsWithoutApproachNormalsMeetTheBars) {
-  studies::FreeformStudyOptions o;
-  o.random_points = 6000;
-  o.shuffle = true;
-  o.approach_normals = false;
-  const studies::FreeformStudyResult r = studies::run_freeform_study(o);
+  const studies::FreeformStudyResult r = studies::run_freeform_study(studies::scattered_points(6000));
   expect_freeform_bars(r);
   EXPECT_EQ(r.cad.material.at(0).source, cad::MaterialSource::Data);
 }
@@ -85,10 +81,7 @@ void expect_low_noise_bars(const studies::FreeformStudyOptions& o, double max_er
 }
 
 TEST(Pipeline, ThreeThousandRandomPointsAtLowNoiseKeepEveryRow) {
-  studies::FreeformStudyOptions o;
-  o.random_points = 3000;
-  o.shuffle = true;
-  o.approach_normals = false;
+  studies::FreeformStudyOptions o = studies::scattered_points(3000);
   o.noise_sigma = 0.0015;
   expect_low_noise_bars(o, 0.005);
 }

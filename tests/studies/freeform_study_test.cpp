@@ -72,10 +72,7 @@ Coverage over_three_seeds(studies::FreeformStudyOptions o) {
 }
 
 TEST(FreeformStudy, UncertaintyCoversTheTrueErrorOnThePanelAndInEachRegion_RandomPointsLowNoise) {
-  studies::FreeformStudyOptions o;
-  o.random_points = 3000;
-  o.shuffle = true;
-  o.approach_normals = false;
+  studies::FreeformStudyOptions o = studies::scattered_points(3000);
   o.noise_sigma = 0.0015;
   expect_covers(over_three_seeds(o), "3 000 random points, sigma 1.5 um");
 }

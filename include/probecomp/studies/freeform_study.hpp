@@ -27,6 +27,10 @@ struct FreeformStudyOptions {
   compensation::CompensateOptions compensate;  // method and probe radius are set by the study
 };
 
+// The scattered-points variant: n points at random (u, v), in random order, without approach normals for the CAD
+// method (a scan's points rather than a part program's). Everything else as the defaults.
+[[nodiscard]] FreeformStudyOptions scattered_points(int n);
+
 struct FreeformStudyResult : MethodComparison {
   simulation::FreeformCase freeform;
   std::vector<simulation::ProgrammedPoint> plan;  // in measurement order
