@@ -1,7 +1,6 @@
 #include "probecomp/io/dmis.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -73,13 +72,10 @@ std::optional<DmisPoint> parse_point(const Statement& s, const std::string& name
   std::istringstream in(text.substr(eq + 1 + std::string("FEAT/POINT,CART,").size()));
   std::string field;
   while (std::getline(in, field, ',')) {
-    double value = 0.0;
-    const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), value);
-    if (field.empty() || ec != std::errc() || end != field.data() + field.size()) {
-      throw InputError(where + "'" + field + "' is not a number in point " + p.label);
-    }
-    if (!std::isfinite(value)) throw InputError(where + "a coordinate of point " + p.label + " is not finite");
-    v.push_back(value);
+    const std::optional<double> value = parse_number(field);
+    if (!value) throw InputError(where + "'" + field + "' is not a number in point " + p.label);
+    if (!std::isfinite(*value)) throw InputError(where + "a coordinate of point " + p.label + " is not finite");
+    v.push_back(*value);
   }
   if (v.size() != 3 && v.size() != 6) {
     throw InputError(where + "point " + p.label + " has " + std::to_string(v.size()) +

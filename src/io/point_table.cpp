@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -135,13 +134,12 @@ PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit) {
       if (separator != ',' && std::count(f.begin(), f.end(), ',') == 1 && f.find('.') == std::string::npos) {
         f[f.find(',')] = '.';
       }
-      double value = 0.0;
-      const auto [end, ec] = std::from_chars(f.data(), f.data() + f.size(), value);
-      if (ec != std::errc() || end != f.data() + f.size() || f.empty()) {
+      const std::optional<double> value = parse_number(f);
+      if (!value) {
         throw InputError(where + "column '" + t.columns[static_cast<std::size_t>(c)] + "' is not a number: '" + f + "'");
       }
-      if (!std::isfinite(value)) throw InputError(where + "column '" + t.columns[static_cast<std::size_t>(c)] + "' is not finite");
-      return value;
+      if (!std::isfinite(*value)) throw InputError(where + "column '" + t.columns[static_cast<std::size_t>(c)] + "' is not finite");
+      return *value;
     };
     t.points.emplace_back(unit.mm * number_at(ix), unit.mm * number_at(iy), unit.mm * number_at(iz));
     if (ii >= 0) {

@@ -2,7 +2,6 @@
 
 #include <Eigen/SVD>
 
-#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <string>
@@ -42,13 +41,10 @@ geometry::RigidTransform read_transform(const std::filesystem::path& path) {
       std::size_t end = pos;
       while (end < text.size() && text[end] != ' ' && text[end] != '\t' && text[end] != ',' && text[end] != '\r') ++end;
       const std::string field = text.substr(pos, end - pos);
-      double v = 0.0;
-      const char* first = field.data() + (field.starts_with("+") ? 1 : 0);
-      const auto [stop, ec] = std::from_chars(first, field.data() + field.size(), v);
-      if (ec != std::errc() || stop != field.data() + field.size() || !std::isfinite(v)) {
-        throw InputError(where + "'" + field + "' is not a finite number");
-      }
-      values.push_back(v);
+      // A leading '+' is allowed here: matrices are often printed with signs on every entry.
+      const std::optional<double> v = parse_number(std::string_view(field).substr(field.starts_with("+") ? 1 : 0));
+      if (!v || !std::isfinite(*v)) throw InputError(where + "'" + field + "' is not a finite number");
+      values.push_back(*v);
       pos = end;
     }
     if (values.size() != 4) {

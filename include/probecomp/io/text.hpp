@@ -3,7 +3,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace probecomp::io {
 
@@ -12,6 +15,15 @@ namespace probecomp::io {
   if (b == std::string::npos) return {};
   const auto e = s.find_last_not_of(" \t\r");
   return s.substr(b, e - b + 1);
+}
+
+// The number a whole field holds (std::from_chars: no blanks, no leading '+', nothing after it; "inf" and "nan"
+// are numbers here, so callers that need a finite length check), or nothing.
+[[nodiscard]] inline std::optional<double> parse_number(std::string_view field) {
+  double value = 0.0;
+  const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), value);
+  if (field.empty() || ec != std::errc() || end != field.data() + field.size()) return std::nullopt;
+  return value;
 }
 
 [[nodiscard]] inline std::string lower(std::string s) {
