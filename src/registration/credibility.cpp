@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 
 #include "probecomp/geometry/point_set.hpp"
 #include "probecomp/geometry/statistics.hpp"
@@ -82,7 +83,7 @@ CoarseAlignment coarse_align(const cad::ModelLocator& offset_model, std::span<co
       for (double sign : {1.0, -1.0}) {
         // CAD → machine as the initial transform, then the turn about the axis in the machine frame.
         geometry::RigidTransform turn = geometry::RigidTransform::Identity();
-        turn.linear() = Eigen::AngleAxisd(sign * angle * M_PI / 180.0, axes.axes.col(axis)).toRotationMatrix();
+        turn.linear() = Eigen::AngleAxisd(sign * angle * std::numbers::pi / 180.0, axes.axes.col(axis)).toRotationMatrix();
         turn.translation() = axes.centroid - turn.linear() * axes.centroid;
         starts.push_back(turn * options.initial);
       }
