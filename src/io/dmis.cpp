@@ -31,6 +31,7 @@ struct DmisPoint {
   std::string label;
   Point3 x;
   std::optional<Vector3> n;
+  std::vector<std::string> fields;  // the numbers as written: x, y, z[, i, j, k]
   int line = 0;
   LengthUnit unit;  // of x
 };
@@ -76,6 +77,7 @@ std::optional<DmisPoint> parse_point(const Statement& s, const std::string& name
     if (!value) throw InputError(where + "'" + field + "' is not a number in point " + p.label);
     if (!std::isfinite(*value)) throw InputError(where + "a coordinate of point " + p.label + " is not finite");
     v.push_back(*value);
+    p.fields.push_back(field);
   }
   if (v.size() != 3 && v.size() != 6) {
     throw InputError(where + "point " + p.label + " has " + std::to_string(v.size()) +
@@ -156,11 +158,9 @@ PointTable read_point_dmis(const std::filesystem::path& path, std::optional<Leng
     }
     t.points.push_back(p.unit.mm * p.x);
     t.line.push_back(p.line);
-    std::vector<std::string> row{p.label, std::to_string(p.x.x()), std::to_string(p.x.y()), std::to_string(p.x.z())};
-    if (with_normals) {
-      normals.push_back(*p.n);
-      for (int c = 0; c < 3; ++c) row.push_back(std::to_string((*p.n)[c]));
-    }
+    std::vector<std::string> row{p.label};
+    row.insert(row.end(), p.fields.begin(), p.fields.end());
+    if (with_normals) normals.push_back(*p.n);
     t.rows.push_back(std::move(row));
   }
   if (with_normals) t.normals = std::move(normals);

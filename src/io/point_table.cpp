@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "probecomp/io/text.hpp"
@@ -68,7 +69,7 @@ std::vector<int> PointTable::carried_columns() const {
   std::vector<int> out;
   for (int c = 0; c < static_cast<int>(columns.size()); ++c) {
     const std::string n = lower(columns[static_cast<std::size_t>(c)]);
-    if (n != "x" && n != "y" && n != "z" && n != "i" && n != "j" && n != "k") out.push_back(c);
+    if (n != "x" && n != "y" && n != "z" && n != "i" && n != "j" && n != "k" && n != "r") out.push_back(c);
   }
   return out;
 }
@@ -96,9 +97,10 @@ PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit) {
   t.unit = unit;
   std::string line;
   int number = 0;
-  int ix = -1, iy = -1, iz = -1, ii = -1, ij = -1, ik = -1;
+  int ix = -1, iy = -1, iz = -1, ii = -1, ij = -1, ik = -1, ir = -1;
   bool have_header = false;
   std::vector<Vector3> normals;
+  std::vector<double> radii;
   char separator = ',';
   while (std::getline(in, line)) {
     ++number;
@@ -113,7 +115,7 @@ PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit) {
       t.columns = fields;
       for (int c = 0; c < static_cast<int>(fields.size()); ++c) {
         const std::string n = lower(fields[static_cast<std::size_t>(c)]);
-        int* slot = n == "x" ? &ix : n == "y" ? &iy : n == "z" ? &iz : n == "i" ? &ii : n == "j" ? &ij : n == "k" ? &ik : nullptr;
+        int* slot = n == "x" ? &ix : n == "y" ? &iy : n == "z" ? &iz : n == "i" ? &ii : n == "j" ? &ij : n == "k" ? &ik : n == "r" ? &ir : nullptr;
         if (slot != nullptr) {
           if (*slot >= 0) throw InputError(where + "column '" + n + "' appears twice in the header");
           *slot = c;
@@ -129,7 +131,7 @@ PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit) {
       throw InputError(where + "expected " + std::to_string(t.columns.size()) + " fields, found " + std::to_string(fields.size()));
     }
     auto number_at = [&](int c) {
-      std::string f = fields[static_cast<std::size_t>(c)];
+      std::string& f = fields[static_cast<std::size_t>(c)];
       // With ';' or tab between fields, a decimal comma (one, and no point) is a decimal point.
       if (separator != ',' && std::count(f.begin(), f.end(), ',') == 1 && f.find('.') == std::string::npos) {
         f[f.find(',')] = '.';
@@ -147,12 +149,22 @@ PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit) {
       if (!(n.norm() > 0.0)) throw InputError(where + "the normal i, j, k is zero");
       normals.push_back(n.normalized());
     }
+    if (ir >= 0) {
+      if (fields[static_cast<std::size_t>(ir)].empty()) {
+        radii.push_back(std::numeric_limits<double>::quiet_NaN());
+      } else {
+        const double r = number_at(ir);
+        if (!(r > 0.0)) throw InputError(where + "column 'r' (the tip radius) must be positive, not " + fields[static_cast<std::size_t>(ir)]);
+        radii.push_back(unit.mm * r);
+      }
+    }
     t.rows.push_back(std::move(fields));
     t.line.push_back(number);
   }
   if (!have_header) throw InputError(name + ": no header line (expected columns x,y,z)");
   if (t.points.empty()) throw InputError(name + ": no points");
   if (ii >= 0) t.normals = std::move(normals);
+  if (ir >= 0) t.radii = std::move(radii);
   return t;
 }
 

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -84,3 +85,40 @@ TEST(ReadPointCsv, WhatItStillRefusesNamesTheLine) {
 
 }  // namespace
 }  // namespace probecomp::io
+
+TEST(PointTable, RadiusColumnGivesEachRowItsTipRadiusAndLeavesEmptyCellsToTheDefault) {
+  const std::filesystem::path p = std::filesystem::temp_directory_path() / "probecomp_radius_column.csv";
+  {
+    std::ofstream f(p);
+    f << "x,y,z,r,tip\n1,2,3,0.5,small\n4,5,6,,default\n7,8,9,1,big\n";
+  }
+  const probecomp::io::PointTable t = probecomp::io::read_point_csv(p);
+  ASSERT_TRUE(t.radii.has_value());
+  ASSERT_EQ(t.radii->size(), 3u);
+  EXPECT_EQ((*t.radii)[0], 0.5);
+  EXPECT_TRUE(std::isnan((*t.radii)[1]));
+  EXPECT_EQ((*t.radii)[2], 1.0);
+  // r is ours, not carried; tip is carried.
+  EXPECT_EQ(t.carried_columns(), std::vector<int>{4});
+  const probecomp::io::PointTable inch = probecomp::io::read_point_csv(p, probecomp::io::kInch);
+  EXPECT_DOUBLE_EQ((*inch.radii)[0], 0.5 * 25.4);
+  std::filesystem::remove(p);
+}
+
+TEST(PointTable, RadiusThatIsNotAPositiveNumberNamesTheLine) {
+  const std::filesystem::path p = std::filesystem::temp_directory_path() / "probecomp_bad_radius.csv";
+  for (const char* bad : {"0", "-1", "abc", "nan"}) {
+    {
+      std::ofstream f(p);
+      f << "x,y,z,r\n1,2,3,1\n4,5,6," << bad << "\n";
+    }
+    try {
+      (void)probecomp::io::read_point_csv(p);
+      ADD_FAILURE() << "accepted r = " << bad;
+    } catch (const probecomp::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(":3:"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("'r'"), std::string::npos) << e.what();
+    }
+  }
+  std::filesystem::remove(p);
+}

@@ -1,6 +1,7 @@
 #pragma once
 // Number and JSON formatting shared by the result writers and the commands: lengths with 9 decimals (nm), unit vectors with 12.
 
+#include <charconv>
 #include <cstdio>
 #include <string>
 
@@ -10,6 +11,13 @@ inline std::string fmt(const char* format, double value) {
   char buf[64];
   std::snprintf(buf, sizeof buf, format, value + 0.0);  // + 0.0 turns −0 into 0
   return buf;
+}
+// The shortest text that reads back as the same double (std::to_chars): for files converted between formats, where
+// a value must come back exactly.
+inline std::string exact(double v) {
+  char buf[32];
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v + 0.0);
+  return std::string(buf, ec == std::errc() ? end : buf);
 }
 inline std::string mm(double v) { return fmt("%.9f", v); }
 inline std::string unit(double v) { return fmt("%.12f", v); }
