@@ -61,6 +61,7 @@ struct CompensatedPoint {
   // centre's whole scatter about the model. NaN where nothing was computed.
   double uncertainty = std::numeric_limits<double>::quiet_NaN();
   int face = -1;                     // index of the CAD face (cad::Face::index)
+  double radius = 0.0;               // the tip radius the point was taken (and compensated) with, mm
   [[nodiscard]] bool computed() const { return status != PointStatus::NotOnModel && status != PointStatus::Failed; }
 };
 
