@@ -124,7 +124,7 @@ int run_fit(const FitArgs& a) {
                                  {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform}});
   const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform);
   const compensation::CompensationResult r = run_pipeline(l, compensation::Method::Cad, a.accept_doubtful_registration, a.quiet);
-  const std::vector<nurbs::Surface> surfaces = compensation::fitted_part_surfaces(r, l.inputs.probe_radius);
+  const std::vector<nurbs::Surface> surfaces = compensation::fitted_part_surfaces(r);
   if (surfaces.empty()) {
     throw FitError("no face holds enough points for a fit, so there is no measured surface to write");
   }

@@ -199,11 +199,38 @@ double signed_distance(const cad::Face& face, const Point3& x, const nurbs::Clos
 }
 
 // What both methods and prepare_model need before anything else.
-void check_model_and_radius(const cad::Model& model, double probe_radius) {
-  if (!(probe_radius > 0.0) || !std::isfinite(probe_radius)) {
+void check_model_and_radii(const cad::Model& model, const geometry::TipRadii& radii, std::size_t points) {
+  if (!(radii.smallest() > 0.0) || !std::isfinite(radii.largest())) {
     throw InputError("the probe radius must be a positive number of mm");
   }
+  if (!radii.uniform() && radii.count() != points) {
+    throw InputError("the points have " + std::to_string(radii.count()) + " tip radii for " + std::to_string(points) +
+                     " points");
+  }
   if (model.faces.empty()) throw InputError("the CAD model has no faces");
+}
+
+// The tip radius of every point: probe_radii where given (each checked, naming the point), else probe_radius.
+geometry::TipRadii tip_radii(const CompensateOptions& options, std::size_t points) {
+  if (options.probe_radii.empty()) return geometry::TipRadii(options.probe_radius);
+  if (options.probe_radii.size() != points) {
+    throw InputError("the points have " + std::to_string(options.probe_radii.size()) + " tip radii for " +
+                     std::to_string(points) + " points");
+  }
+  for (std::size_t k = 0; k < points; ++k) {
+    const double r = options.probe_radii[k];
+    if (!(r > 0.0) || !std::isfinite(r)) {
+      throw InputError("point " + std::to_string(k + 1) + ": the tip radius must be a positive number of mm, not " +
+                       mm(r));
+    }
+  }
+  return geometry::TipRadii(options.probe_radii);
+}
+
+// Centres of tips larger than the smallest, moved in along `normal` (outward, machine frame) by the difference:
+// onto the smallest tip's centre surface, exactly when `normal` is the actual surface's.
+Point3 as_smallest_tip(const geometry::TipRadii& radii, std::size_t k, const Point3& centre, const Vector3& normal) {
+  return radii.uniform() ? centre : Point3(centre - (radii[k] - radii.smallest()) * normal);
 }
 
 // Why a face's fit stopped, in one line.
@@ -266,11 +293,13 @@ Statistics statistics(std::span<const CompensatedPoint> points) {
   return st;
 }
 
-PreparedModel prepare_model(const cad::Model& model, double probe_radius, std::span<const Point3> raw,
+PreparedModel prepare_model(const cad::Model& model, const geometry::TipRadii& radii, std::span<const Point3> raw,
                             std::optional<std::span<const Vector3>> approach_normals, const PrepareOptions& options) {
-  check_model_and_radius(model, probe_radius);
+  check_model_and_radii(model, radii, raw.size());
   const geometry::Stopwatch clock;
+  const double probe_radius = radii.smallest();
   PreparedModel p;
+  p.radii = radii;
   p.probe_radius = probe_radius;
   auto nominal = std::make_unique<cad::Model>(model);  // a copy: the material side is decided into its faces' `outward`
   p.material = cad::decide_material_side(*nominal, raw, approach_normals, options.initial);
@@ -286,10 +315,11 @@ PreparedModel prepare_model(const cad::Model& model, double probe_radius, std::s
 registration::RegistrationResult register_centres(const PreparedModel& prepared, std::span<const Point3> raw,
                                                   const RegisterOptions& options) {
   check_points_near(*prepared.locator, raw, options.icp.initial, options.max_initial_distance_fraction);
+  const std::vector<double> beyond = prepared.radii.beyond_smallest();
   registration::RegistrationResult r =
-      registration::register_to_offset_model(*prepared.offset, *prepared.locator, raw, options.icp);
+      registration::register_to_offset_model(*prepared.offset, *prepared.locator, raw, options.icp, beyond);
   check_registration(r);
-  const double radius = prepared.probe_radius;
+  const geometry::TipRadii& radius = prepared.radii;
   const registration::Credibility first = registration::assess_registration(r, radius);
   if (first.ok()) return r;
   // Doubtful from the given start: ICP may have found a local minimum. Multi-start ICP from turned starts looks
@@ -316,7 +346,7 @@ registration::RegistrationResult register_centres(const PreparedModel& prepared,
     }
     again.initial = coarse.transform;
     registration::RegistrationResult candidate =
-        registration::register_to_offset_model(*prepared.offset, *prepared.locator, raw, again);
+        registration::register_to_offset_model(*prepared.offset, *prepared.locator, raw, again, beyond);
     check_registration(candidate);
     const double score = registration::registration_score(candidate, radius);
     if (!(score < (1.0 - kBetterScore) * best_score)) break;
@@ -370,7 +400,6 @@ constexpr double kMinContactAngle = 15.0;
 
 std::vector<int> second_contacts(const PreparedModel& prepared, std::span<const Point3> raw,
                                  const registration::RegistrationResult& registration) {
-  const double tol = contact_tolerance(registration.scale, prepared.probe_radius);
   const double min_cos = std::cos(kMinContactAngle * std::numbers::pi / 180.0);
   const geometry::RigidTransform to_cad = registration.transform.inverse();
   return geometry::parallel_map<int>(raw.size(), 64, [&](std::size_t k) {
@@ -380,8 +409,9 @@ std::vector<int> second_contacts(const PreparedModel& prepared, std::span<const 
     // contact direction is from its foot to the centre (its normal inside the face; across a convex edge shared
     // with the first face, nearly the first face's normal, which is one contact, not two).
     const Point3 c = to_cad * raw[k];
-    const cad::ModelPoint other =
-        prepared.nominal_locator->closest_point_on_other_faces(c, m.face, std::abs(prepared.probe_radius + m.distance) + tol);
+    const double r = prepared.radii[k];
+    const double tol = contact_tolerance(registration.scale, r);
+    const cad::ModelPoint other = prepared.nominal_locator->closest_point_on_other_faces(c, m.face, std::abs(r + m.distance) + tol);
     if (other.face < 0 || !other.ok()) return -1;
     const Vector3 n = prepared.nominal_locator->outward_normal(m.face, m.u, m.v);
     return n.dot((c - other.point).normalized()) < min_cos ? other.face : -1;
@@ -419,9 +449,21 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     if (rep.material == cad::MaterialSource::NoPoints) rep.material = cad::MaterialSource::File;
     const std::vector<std::size_t>& members = ff.members;
     const nurbs::Surface start = fit_start(prepared.offset->model.faces[static_cast<std::size_t>(f)].surface, T);
+    // The members' centres as the smallest tip's would be: a larger tip's moved in by the difference along the
+    // registered nominal normal, and once there is a fit, along the fit's own (see the refits below).
+    const geometry::TipRadii& radii = prepared.radii;
+    bool mixed = false;
     std::vector<Point3> member_points;
     member_points.reserve(members.size());
-    for (std::size_t k : members) member_points.push_back(raw[k]);
+    for (std::size_t k : members) {
+      if (radii.uniform() || radii[k] == radii.smallest()) {
+        member_points.push_back(raw[k]);
+        continue;
+      }
+      mixed = true;
+      const registration::PointMatch& m = registration.matches[k];
+      member_points.push_back(as_smallest_tip(radii, k, raw[k], T.linear() * prepared.nominal_locator->outward_normal(f, m.u, m.v)));
+    }
     // A point at an earlier point's position (a reading recorded twice: a scanner's repeated sample, a row copied)
     // is one observation: fitted once. Counted twice it would be its own nearest neighbour, so the noise estimate
     // (differences of neighbouring residuals) would read low, the cross-validation would take the copies as
@@ -430,6 +472,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     const std::vector<std::uint32_t> first = geometry::first_at_same_position(member_points, kSamePosition);
     std::vector<std::uint32_t> position(members.size());  // member → its position among the fitted points
     std::vector<Point3> pts;
+    std::vector<std::size_t> fitted_point;  // fitted point → its input index
     std::vector<fitting::SurfaceParameter> params;
     for (std::size_t i = 0; i < members.size(); ++i) {
       if (first[i] != i) {
@@ -439,6 +482,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       }
       position[i] = static_cast<std::uint32_t>(pts.size());
       pts.push_back(member_points[i]);
+      fitted_point.push_back(members[i]);
       params.push_back({registration.matches[members[i]].u, registration.matches[members[i]].v});
     }
     const double needed = options.min_points_per_control_point * start.num_u() * start.num_v();
@@ -458,6 +502,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       // until the set left out no longer changes: a point left out is taken back when the fit made without it
       // predicts it within its bound (a point a fit bent by a gross error had pushed out), so that the set left
       // out is the one the final fit agrees with.
+      bool moved_along_fit = false;
       for (int attempt = 0; attempt < kMaxOutlierFits; ++attempt) {
         // A refit starts over from the registered offset face: the first fit's refinement and adaptive penalty
         // may have followed the gross errors it then found, and would keep their marks.
@@ -472,7 +517,21 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
           ++changed;
           largest = std::max(largest, std::abs(fit->residuals[i]));
         }
-        if (changed == 0 || !moves_fit(largest, pts.size(), *fit)) break;
+        // Larger tips' centres were moved in along the nominal normal, which is off the actual one by the part's
+        // tilt θ there: an error of Δr·(1 − cos θ) (0.4 µm for Δr = 0.5 mm at 2°). Moved again along the fit's
+        // normal, once, and refitted.
+        const bool move_again = mixed && !moved_along_fit;
+        if (move_again) {
+          for (std::size_t j = 0; j < pts.size(); ++j) {
+            const std::size_t k = fitted_point[j];
+            const nurbs::UnitNormal n = nurbs::unit_normal(fit->surface, fit->params[j].u, fit->params[j].v);
+            if (n.status != nurbs::UnitNormal::Status::Degenerate) {
+              pts[j] = as_smallest_tip(radii, k, raw[k], static_cast<double>(face.outward) * n.n);
+            }
+          }
+          moved_along_fit = true;
+        }
+        if (!move_again && (changed == 0 || !moves_fit(largest, pts.size(), *fit))) break;
       }
     }
     rep.fitted = fit && fit->fitted();
@@ -517,9 +576,10 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
                                                 const registration::RegistrationResult& registration,
                                                 const FitResult& fits) {
   const cad::Model& work = *prepared.nominal;
-  const double r = prepared.probe_radius;
+  const geometry::TipRadii& radii = prepared.radii;
   const geometry::RigidTransform& T = registration.transform;
   std::vector<CompensatedPoint> out(raw.size());
+  for (std::size_t k = 0; k < raw.size(); ++k) out[k].radius = radii[k];
   // Points no fit stands behind (past an edge, against two faces, on a face with too few points): the tip touched
   // the nominal part where it is nearest to the registered centre, on whichever face that is. Offset towards that
   // point (along its face's normal inside a face, towards the edge past one); the deviation is the centre's
@@ -553,6 +613,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
     c.status = m.on_edge ? PointStatus::Edge : double_contact(k) ? PointStatus::DoubleContact : PointStatus::FewPoints;
     c.face = work.faces[static_cast<std::size_t>(foot.face)].index;
     c.normal = T.linear() * towards;
+    const double r = radii[k];
     c.contact = raw[k] - r * c.normal;
     c.deviation = foot.distance - (foot.distance < 0.0 ? -r : r);
     c.uncertainty = registration.scale;
@@ -561,9 +622,19 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
     if (!ff.report.fitted) continue;
     const cad::Face& face = work.faces[static_cast<std::size_t>(ff.face)];
     const std::vector<std::size_t>& members = ff.members;
+    // The fit is of the smallest tip's centre surface: each member's centre moved onto it along the fit's normal.
     std::vector<Point3> pts(members.size());
-    for (std::size_t i = 0; i < members.size(); ++i) pts[i] = raw[members[i]];
-    const std::vector<ContactPoint> contacts = contact_points(ff.fit->surface, face.outward, r, pts, ff.params);
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      const std::size_t k = members[i];
+      pts[i] = raw[k];
+      if (radii.uniform() || radii[k] == radii.smallest()) continue;
+      const nurbs::UnitNormal n = nurbs::unit_normal(ff.fit->surface, ff.params[i].u, ff.params[i].v);
+      if (n.status != nurbs::UnitNormal::Status::Degenerate) {
+        pts[i] = as_smallest_tip(radii, k, raw[k], static_cast<double>(face.outward) * n.n);
+      }
+    }
+    const std::vector<ContactPoint> contacts =
+        contact_points(ff.fit->surface, face.outward, radii.smallest(), pts, ff.params);
     for (std::size_t i = 0; i < members.size(); ++i) {
       CompensatedPoint& c = out[members[i]];
       c.face = face.index;
@@ -641,7 +712,8 @@ CompensationResult compensate_conventional(const cad::Model& model, std::span<co
   out.points.resize(raw.size());
   if (options.progress) options.progress("registration", 0.0);
   const geometry::Stopwatch clock;
-  const std::vector<Point3> contacts = conventional_contact_points(raw, approach_normals, options.probe_radius);
+  const geometry::TipRadii radii = tip_radii(options, raw.size());
+  const std::vector<Point3> contacts = conventional_contact_points(raw, approach_normals, radii);
   const cad::ModelLocator locator(model);
   check_points_near(locator, contacts, options.registration.initial, options.max_initial_distance_fraction);
   out.registration = registration::register_points(locator, contacts, options.registration);
@@ -651,6 +723,7 @@ CompensationResult compensate_conventional(const cad::Model& model, std::span<co
   for (std::size_t k = 0; k < raw.size(); ++k) {
     const registration::PointMatch& m = out.registration.matches[k];
     CompensatedPoint& c = out.points[k];
+    c.radius = radii[k];
     if (!m.ok() || !contacts[k].allFinite()) continue;
     const cad::Face& face = model.faces[static_cast<std::size_t>(m.face)];
     c.status = m.on_edge ? PointStatus::Edge : PointStatus::Ok;
@@ -674,8 +747,8 @@ CompensationResult compensate_conventional(const cad::Model& model, std::span<co
 CompensationResult compensate(const cad::Model& model, std::span<const Point3> raw,
                               std::optional<std::span<const Vector3>> approach_normals,
                               const CompensateOptions& options) {
-  const double r = options.probe_radius;
-  check_model_and_radius(model, r);
+  const geometry::TipRadii radii = tip_radii(options, raw.size());
+  check_model_and_radii(model, radii, raw.size());
   if (raw.empty()) throw InputError("no points to compensate");
   if (approach_normals && approach_normals->size() != raw.size()) {
     throw InputError("the approach normals do not match the points in number");
@@ -700,8 +773,9 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   out.method = Method::Cad;
   step("prepare", 0.0);
   PreparedModel prepared =
-      prepare_model(model, r, raw, approach_normals, {.offset = options.offset, .initial = options.registration.initial});
+      prepare_model(model, radii, raw, approach_normals, {.offset = options.offset, .initial = options.registration.initial});
   out.seconds.prepare = prepared.seconds;
+  out.centre_radius = prepared.probe_radius;
   out.material = prepared.material;
 
   step("registration", 0.15);
@@ -755,8 +829,8 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   return out;
 }
 
-std::vector<nurbs::Surface> fitted_part_surfaces(const CompensationResult& result, double probe_radius,
-                                                 const fitting::OffsetOptions& options) {
+std::vector<nurbs::Surface> fitted_part_surfaces(const CompensationResult& result, const fitting::OffsetOptions& options) {
+  const double probe_radius = result.centre_radius;
   std::vector<nurbs::Surface> out;
   for (const FaceReport& f : result.faces) {
     if (!f.fitted) continue;

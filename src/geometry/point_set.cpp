@@ -6,12 +6,18 @@
 
 namespace probecomp::geometry {
 
-std::vector<Point3> spread_subset(std::span<const Point3> points, std::size_t k) {
-  std::vector<Point3> out;
+std::vector<std::size_t> spread_subset_indices(std::span<const Point3> points, std::size_t k) {
+  std::vector<std::size_t> out;
   const std::size_t step = std::max<std::size_t>(1, points.size() / std::max<std::size_t>(k, 1));
   for (std::size_t i = 0; i < points.size(); i += step) {
-    if (points[i].allFinite()) out.push_back(points[i]);
+    if (points[i].allFinite()) out.push_back(i);
   }
+  return out;
+}
+
+std::vector<Point3> spread_subset(std::span<const Point3> points, std::size_t k) {
+  std::vector<Point3> out;
+  for (std::size_t i : spread_subset_indices(points, k)) out.push_back(points[i]);
   return out;
 }
 

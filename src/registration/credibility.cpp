@@ -32,14 +32,16 @@ double scored(const PointMatch& m, double r) {
 
 }  // namespace
 
-Credibility assess_registration(const RegistrationResult& r, double probe_radius) {
+Credibility assess_registration(const RegistrationResult& r, const geometry::TipRadii& radii) {
   Credibility c;
   c.scale = r.scale;
+  const double probe_radius = radii.smallest();
   std::size_t used = 0, inside = 0;
-  for (const PointMatch& m : r.matches) {
+  for (std::size_t k = 0; k < r.matches.size(); ++k) {
+    const PointMatch& m = r.matches[k];
     if (!m.ok() || m.on_edge) continue;
     ++used;
-    inside += m.distance < -0.5 * probe_radius;
+    inside += m.distance < -0.5 * radii[k];
   }
   const std::size_t n = std::max<std::size_t>(r.matches.size(), 1);
   c.overlap = static_cast<double>(used) / static_cast<double>(n);
@@ -60,16 +62,24 @@ Credibility assess_registration(const RegistrationResult& r, double probe_radius
   return c;
 }
 
-double registration_score(const RegistrationResult& r, double probe_radius) {
+double registration_score(const RegistrationResult& r, const geometry::TipRadii& radii) {
   std::vector<double> residuals;
   residuals.reserve(r.matches.size());
-  for (const PointMatch& m : r.matches) residuals.push_back(scored(m, probe_radius));
-  return residuals.empty() ? probe_radius : geometry::median_in_place(residuals);
+  for (std::size_t k = 0; k < r.matches.size(); ++k) residuals.push_back(scored(r.matches[k], radii[k]));
+  return residuals.empty() ? radii.smallest() : geometry::median_in_place(residuals);
 }
 
-CoarseAlignment coarse_align(const cad::ModelLocator& offset_model, std::span<const Point3> raw, double probe_radius,
-                             const RegistrationOptions& options, const CoarseAlignmentOptions& coarse) {
-  const std::vector<Point3> subset = geometry::spread_subset(raw, coarse.subset_points);
+CoarseAlignment coarse_align(const cad::ModelLocator& offset_model, std::span<const Point3> raw,
+                             const geometry::TipRadii& radii, const RegistrationOptions& options,
+                             const CoarseAlignmentOptions& coarse) {
+  const std::vector<std::size_t> chosen = geometry::spread_subset_indices(raw, coarse.subset_points);
+  std::vector<Point3> subset;
+  for (std::size_t k : chosen) subset.push_back(raw[k]);
+  std::vector<double> beyond;
+  for (std::size_t k : chosen) {
+    if (!radii.uniform()) beyond.push_back(radii[k] - radii.smallest());
+  }
+  const geometry::TipRadii subset_radii = radii.subset(chosen);
   CoarseAlignment best;
   best.transform = options.initial;
   if (subset.size() < 6) return best;
@@ -94,10 +104,10 @@ CoarseAlignment coarse_align(const cad::ModelLocator& offset_model, std::span<co
   best.score = std::numeric_limits<double>::infinity();
   for (const geometry::RigidTransform& start : starts) {
     o.initial = start;
-    const RegistrationResult r = register_points(offset_model, subset, o);
+    const RegistrationResult r = register_points(offset_model, subset, o, beyond);
     ++best.starts;
     if (r.status == Status::TooFewPoints || r.status == Status::NumericalError) continue;
-    const double score = registration_score(r, probe_radius);
+    const double score = registration_score(r, subset_radii);
     // Strictly better only: ties keep the earlier start (the given one first), so the choice is deterministic.
     if (score < best.score) {
       best.score = score;

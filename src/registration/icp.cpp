@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "probecomp/geometry/point_tree.hpp"
 
@@ -159,14 +160,18 @@ std::string describe(double mm_value) {
 
 // The ICP loop on all `machine_points`. `hints` (empty, or one per point) start the first pass's Newton.
 RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point3> machine_points,
-                           const RegistrationOptions& options, std::vector<cad::ModelPoint> hints) {
+                           const RegistrationOptions& options, std::vector<cad::ModelPoint> hints,
+                           std::span<const double> offsets) {
   RegistrationResult result;
   const std::size_t n = machine_points.size();
   const std::size_t needed = options.metric == Metric::PointToPlane ? 6 : 3;
   geometry::RigidTransform to_cad = options.initial.inverse();
 
   std::vector<Point3> x(n);
-  std::vector<cad::ModelPoint> feet = std::move(hints);
+  std::vector<cad::ModelPoint> feet = std::move(hints);  // the model's closest points: the next pass's hints
+  // With offsets, each foot moved out along its normal by its point's offset: the targets the estimate uses.
+  std::vector<cad::ModelPoint> moved;
+  const std::vector<cad::ModelPoint>& targets = offsets.empty() ? feet : moved;
   std::vector<double> r(n), w(n);
   std::vector<char> use(n, 0);  // the point's correspondence enters the estimate (its weight may still be 0)
   std::vector<double> used_r;
@@ -184,9 +189,16 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   auto correspond = [&](Search mode) {
     for (std::size_t i = 0; i < n; ++i) x[i] = to_cad * machine_points[i];
     feet = feet.empty() ? model.closest_points(x) : model.closest_points(x, feet, mode);
+    if (!offsets.empty()) {
+      moved = feet;
+      for (std::size_t i = 0; i < n; ++i) {
+        moved[i].point += offsets[i] * moved[i].normal;
+        moved[i].distance -= offsets[i];
+      }
+    }
     used_r.clear();
     for (std::size_t i = 0; i < n; ++i) {
-      const cad::ModelPoint& m = feet[i];
+      const cad::ModelPoint& m = targets[i];
       use[i] = x[i].allFinite() && usable(m, options.max_distance);
       r[i] = !use[i] ? 0.0 : options.metric == Metric::PointToPlane ? m.distance : (x[i] - m.point).norm();
       w[i] = use[i] ? 1.0 : 0.0;
@@ -235,7 +247,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
       centre = 0.5 * (box.min + box.max);
       max_radius = 0.5 * box.diagonal();
     }
-    const Step step = estimate(options.metric, x, feet, w, centroid, length);
+    const Step step = estimate(options.metric, x, targets, w, centroid, length);
     result.constraints = step.constraints;
     if (!step.finite) {
       result.status = Status::NumericalError;
@@ -292,8 +304,8 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   result.inliers = 0;
   for (std::size_t i = 0; i < n; ++i) {
     PointMatch& pm = result.matches[i];
-    if (i < feet.size()) {
-      const cad::ModelPoint& m = feet[i];
+    if (i < targets.size()) {
+      const cad::ModelPoint& m = targets[i];
       pm.status = m.status;
       pm.face = m.face;
       pm.u = m.u;
@@ -316,20 +328,26 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
 }  // namespace
 
 RegistrationResult register_points(const cad::ModelLocator& model, std::span<const Point3> machine_points,
-                                   const RegistrationOptions& options) {
+                                   const RegistrationOptions& options, std::span<const double> offsets) {
   const std::size_t n = machine_points.size();
-  if (n < 4 * kCoarseStagePoints) return iterate(model, machine_points, options, {});
+  if (!offsets.empty() && offsets.size() != n) {
+    throw std::invalid_argument("register_points: one offset per point expected");
+  }
+  if (n < 4 * kCoarseStagePoints) return iterate(model, machine_points, options, {}, offsets);
   // Coarse stage: a spread subset (every k-th point) brings the model close, where closest points are cheap.
   // Then each point's Newton starts from the foot of its nearest subset point, and the full set iterates on;
   // an exact pass still confirms every correspondence before convergence is accepted.
   const std::size_t stride = n / kCoarseStagePoints;
   std::vector<Point3> subset;
+  std::vector<double> subset_offsets;
   for (std::size_t i = 0; i < n; i += stride) {
-    if (machine_points[i].allFinite()) subset.push_back(machine_points[i]);
+    if (!machine_points[i].allFinite()) continue;
+    subset.push_back(machine_points[i]);
+    if (!offsets.empty()) subset_offsets.push_back(offsets[i]);
   }
-  const RegistrationResult coarse = iterate(model, subset, options, {});
+  const RegistrationResult coarse = iterate(model, subset, options, {}, subset_offsets);
   if (coarse.status == Status::TooFewPoints || coarse.status == Status::NumericalError) {
-    return iterate(model, machine_points, options, {});
+    return iterate(model, machine_points, options, {}, offsets);
   }
   geometry::PointCloud cloud;
   cloud.points = subset;
@@ -354,7 +372,7 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
   });
   RegistrationOptions full = options;
   full.initial = coarse.transform;
-  RegistrationResult result = iterate(model, machine_points, full, std::move(hints));
+  RegistrationResult result = iterate(model, machine_points, full, std::move(hints), offsets);
   result.coarse_iterations = coarse.iterations;
   return result;
 }

@@ -12,7 +12,8 @@ RegistrationResult register_to_offset_model(const cad::OffsetModel& offset, std:
 }
 
 RegistrationResult register_to_offset_model(const cad::OffsetModel& offset, const cad::ModelLocator& locator,
-                                            std::span<const Point3> raw_centres, const RegistrationOptions& options) {
+                                            std::span<const Point3> raw_centres, const RegistrationOptions& options,
+                                            std::span<const double> beyond) {
   // The offset faces are fits, within their deviation of the true offset: residuals below it are model error,
   // not data, so the robust scale is not allowed below it (else IRLS would weight points by the fit's ripple).
   // A face whose offset folds over (a concave fillet tighter than the tip) or has no normal somewhere is wrong
@@ -24,7 +25,7 @@ RegistrationResult register_to_offset_model(const cad::OffsetModel& offset, cons
                         f.status == fitting::OffsetResult::Status::ToleranceNotReached;
     if (fitted) o.robust.min_scale = std::max(o.robust.min_scale, f.deviation);
   }
-  return register_points(locator, raw_centres, o);
+  return register_points(locator, raw_centres, o, beyond);
 }
 
 }  // namespace probecomp::registration

@@ -103,7 +103,9 @@ std::vector<Touch> simulate_touches(const cad::ModelLocator& actual, std::span<c
                                     const MeasurementOptions& options) {
   std::vector<Touch> out(plan.size());
   tbb::parallel_for(std::size_t{0}, plan.size(),
-                    [&](std::size_t k) { out[k] = touch(actual, plan[k], options.probe_radius); });
+                    [&](std::size_t k) {
+                      out[k] = touch(actual, plan[k], options.probe_radii.empty() ? options.probe_radius : options.probe_radii.at(k));
+                    });
   if (options.noise_sigma > 0.0) {
     std::mt19937_64 rng(options.seed);
     std::normal_distribution<double> noise(0.0, options.noise_sigma);

@@ -60,7 +60,8 @@ MethodComparison compare_methods(const SimulatedMeasurement& m, const Comparison
   const cad::Model actual = simulation::actual_model(m.nominal, m.deformation, m.placement);
   const cad::ModelLocator actual_locator(actual);
   out.touches = simulation::simulate_touches(
-      actual_locator, m.plan, {.probe_radius = m.probe_radius, .noise_sigma = m.noise_sigma, .seed = m.seed});
+      actual_locator, m.plan,
+      {.probe_radius = m.probe_radius, .probe_radii = m.probe_radii, .noise_sigma = m.noise_sigma, .seed = m.seed});
   if (m.repeats_are_copies) {
     for (std::size_t k = 1; k < out.touches.size(); ++k) {
       if (m.plan[k].point == m.plan[k - 1].point && m.plan[k].normal == m.plan[k - 1].normal) {
@@ -85,6 +86,7 @@ MethodComparison compare_methods(const SimulatedMeasurement& m, const Comparison
   compensation::CompensateOptions o = options.compensate;
   o.method = compensation::Method::Cad;
   o.probe_radius = m.probe_radius;
+  o.probe_radii = m.probe_radii;
   // A study's deformations are deliberate (the cylinder's 1.5 mm sine against r = 1 mm): a registration they
   // leave doubtful is scored against the truth, not refused.
   o.accept_doubtful_registration = true;

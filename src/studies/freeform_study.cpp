@@ -47,9 +47,20 @@ FreeformStudyResult run_freeform_study(const FreeformStudyOptions& options) {
     }
     out.plan = std::move(with_repeats);
   }
+  std::vector<double> radii;
+  if (options.second_probe_radius > 0.0) {
+    double x0 = std::numeric_limits<double>::infinity(), x1 = -x0;
+    for (const simulation::ProgrammedPoint& p : out.plan) {
+      x0 = std::min(x0, p.point.x());
+      x1 = std::max(x1, p.point.x());
+    }
+    for (const simulation::ProgrammedPoint& p : out.plan) {
+      radii.push_back(p.point.x() > 0.5 * (x0 + x1) ? options.second_probe_radius : c.probe_radius);
+    }
+  }
   SimulatedMeasurement m{.nominal = c.nominal, .deformation = c.deformation, .placement = c.placement, .plan = out.plan,
-                         .probe_radius = c.probe_radius, .noise_sigma = c.noise_sigma, .seed = options.seed,
-                         .repeats_are_copies = options.exact_repeats};
+                         .probe_radius = c.probe_radius, .probe_radii = radii, .noise_sigma = c.noise_sigma,
+                         .seed = options.seed, .repeats_are_copies = options.exact_repeats};
   static_cast<MethodComparison&>(out) =
       compare_methods(m, {.approach_normals = options.approach_normals, .compensate = options.compensate});
 

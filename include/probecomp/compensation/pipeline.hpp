@@ -26,6 +26,7 @@
 #include "probecomp/compensation/outliers.hpp"
 #include "probecomp/fitting/adaptive.hpp"
 #include "probecomp/fitting/offset.hpp"
+#include "probecomp/geometry/tip_radii.hpp"
 #include "probecomp/registration/icp.hpp"
 
 namespace probecomp::compensation {
@@ -101,7 +102,11 @@ struct PrepareOptions {
 // The model the points are registered to. Movable, not copyable: the locator refers to the offset model, and
 // both live on the heap so that a move keeps that reference valid.
 struct PreparedModel {
-  double probe_radius = 0.0;
+  // The tip radius of each raw centre. The model is offset by the smallest (probe_radius): larger tips' centres
+  // are registered that much farther out, and moved in by the difference before a face is fitted, so that each
+  // face's fit is of the smallest tip's centre surface whatever mix of tips measured it.
+  geometry::TipRadii radii;
+  double probe_radius = 0.0;  // radii.smallest(): the offset model's and the fitted centre surfaces' radius
   // The input model, each face's `outward` its decided material side (held by pointer, as the offset model is,
   // so that the locators over them stay valid when the prepared model moves).
   std::unique_ptr<const cad::Model> nominal;
@@ -113,8 +118,10 @@ struct PreparedModel {
   double seconds = 0.0;
 };
 
-// Throws InputError for a non-positive radius or a model without faces.
-[[nodiscard]] PreparedModel prepare_model(const cad::Model& model, double probe_radius, std::span<const Point3> raw_centres,
+// Throws InputError for a radius that is not positive, per-point radii that do not match the points in number, or a
+// model without faces.
+[[nodiscard]] PreparedModel prepare_model(const cad::Model& model, const geometry::TipRadii& radii,
+                                          std::span<const Point3> raw_centres,
                                           std::optional<std::span<const Vector3>> approach_normals,
                                           const PrepareOptions& options = {});
 
@@ -228,6 +235,8 @@ struct CompensationResult {
   std::vector<cad::MaterialSide> material;        // per face of the model (CAD method)
   std::vector<CompensatedPoint> points;           // one per input point, in order
   std::vector<FaceReport> faces;                  // faces that hold points, by index
+  // The radius the faces' centre surfaces are for: the smallest tip's (PreparedModel::probe_radius), mm.
+  double centre_radius = 0.0;
   Statistics statistics;
   Timings seconds;
   // What the user should know to read the result right, one line each (the command line prints them on standard
@@ -239,6 +248,8 @@ struct CompensationResult {
 struct CompensateOptions {
   Method method = Method::Cad;
   double probe_radius = 0.0;  // mm, > 0
+  // Per point (mm, > 0), when the points were taken with tips of several radii; empty: probe_radius for every point.
+  std::vector<double> probe_radii{};
   registration::RegistrationOptions registration;
   double max_initial_distance_fraction = 0.1;  // as RegisterOptions
   bool accept_doubtful_registration = false;   // as RegisterOptions::accept_doubtful
@@ -256,8 +267,9 @@ struct CompensateOptions {
                                             const CompensateOptions& options);
 
 // The fitted part surfaces (contact surfaces, machine frame) of a CAD-method result: each fitted centre surface
-// offset by the probe radius into the material. Throws FitError where a fitted surface has no normal.
-[[nodiscard]] std::vector<nurbs::Surface> fitted_part_surfaces(const CompensationResult& result, double probe_radius,
+// offset by its radius (result.centre_radius) into the material. Throws FitError where a fitted surface has no
+// normal.
+[[nodiscard]] std::vector<nurbs::Surface> fitted_part_surfaces(const CompensationResult& result,
                                                                const fitting::OffsetOptions& options = {});
 
 }  // namespace probecomp::compensation

@@ -12,6 +12,8 @@ namespace probecomp::geometry {
 
 // About k of the points, spread over the input in its order (every (n/k)-th, the finite ones among them).
 [[nodiscard]] std::vector<Point3> spread_subset(std::span<const Point3> points, std::size_t k);
+// The same, as the points' indices (for data that travel with the points).
+[[nodiscard]] std::vector<std::size_t> spread_subset_indices(std::span<const Point3> points, std::size_t k);
 
 struct PrincipalAxes {
   std::size_t count = 0;                 // finite points

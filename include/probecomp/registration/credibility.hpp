@@ -18,6 +18,7 @@
 #include <string>
 
 #include "probecomp/cad/locator.hpp"
+#include "probecomp/geometry/tip_radii.hpp"
 #include "probecomp/registration/icp.hpp"
 
 namespace probecomp::registration {
@@ -39,11 +40,12 @@ struct Credibility {
   [[nodiscard]] bool ok() const { return status == Status::OK; }
 };
 
-[[nodiscard]] Credibility assess_registration(const RegistrationResult& r, double probe_radius);
+// r is each point's own tip radius; the residual scale is held against the smallest.
+[[nodiscard]] Credibility assess_registration(const RegistrationResult& r, const geometry::TipRadii& radii);
 
 // How well a registration fits, to compare registrations of the same points from different starts: the median
 // |residual|, a point without a usable correspondence or more than r/2 inside the material counting as r. mm.
-[[nodiscard]] double registration_score(const RegistrationResult& r, double probe_radius);
+[[nodiscard]] double registration_score(const RegistrationResult& r, const geometry::TipRadii& radii);
 
 struct CoarseAlignmentOptions {
   // Starts: the given initial transform, and each turned by ± these angles (degrees) about the points' three
@@ -61,8 +63,9 @@ struct CoarseAlignment {
 };
 
 // Multi-start ICP on a subset: the start whose registration has the best registration_score. Deterministic.
+// `offset_model` is offset by radii.smallest(); larger tips' centres are registered that much farther out.
 [[nodiscard]] CoarseAlignment coarse_align(const cad::ModelLocator& offset_model, std::span<const Point3> raw_centres,
-                                           double probe_radius, const RegistrationOptions& options,
+                                           const geometry::TipRadii& radii, const RegistrationOptions& options,
                                            const CoarseAlignmentOptions& coarse = {});
 
 }  // namespace probecomp::registration

@@ -88,8 +88,12 @@ struct RegistrationResult {
 inline constexpr std::size_t kCoarseStagePoints = 4096;
 
 // Registers `machine_points` (machine frame) to the model behind `model` (CAD frame). The result's transform
-// maps CAD to machine. Points on an edge, not found, or not finite are reported, never used.
+// maps CAD to machine. Points on an edge, not found, or not finite are reported, never used. `offsets`, when given
+// (one per point, mm), move each point's target that far out along the model's outward normal: a probe centre of a
+// tip larger than the one the model is offset for (geometry/tip_radii.hpp). Its match's distance is then from that
+// target.
 [[nodiscard]] RegistrationResult register_points(const cad::ModelLocator& model, std::span<const Point3> machine_points,
-                                                 const RegistrationOptions& options = {});
+                                                 const RegistrationOptions& options = {},
+                                                 std::span<const double> offsets = {});
 
 }  // namespace probecomp::registration

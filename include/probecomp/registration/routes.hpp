@@ -21,9 +21,12 @@ namespace probecomp::registration {
 [[nodiscard]] RegistrationResult register_to_offset_model(const cad::OffsetModel& offset,
                                                           std::span<const Point3> raw_centres,
                                                           const RegistrationOptions& options = {});
-// The same with the offset model already indexed (`locator` built on offset.model).
+// The same with the offset model already indexed (`locator` built on offset.model). `beyond`, when given (one per
+// centre, mm), is how much larger each centre's tip is than the radius the model is offset by
+// (geometry::TipRadii::beyond_smallest): its target lies that much farther out.
 [[nodiscard]] RegistrationResult register_to_offset_model(const cad::OffsetModel& offset, const cad::ModelLocator& locator,
                                                           std::span<const Point3> raw_centres,
-                                                          const RegistrationOptions& options = {});
+                                                          const RegistrationOptions& options = {},
+                                                          std::span<const double> beyond = {});
 
 }  // namespace probecomp::registration

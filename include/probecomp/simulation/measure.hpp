@@ -50,6 +50,7 @@ struct PlanMargin {
 
 struct MeasurementOptions {
   double probe_radius = 1.0;  // mm
+  std::vector<double> probe_radii{};  // per programmed point (mm) when several tips measure; empty: probe_radius
   double noise_sigma = 0.0;   // standard deviation of Gaussian noise on each coordinate of the centre, mm
   std::uint64_t seed = 1;
 };

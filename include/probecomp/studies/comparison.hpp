@@ -30,6 +30,7 @@ struct SimulatedMeasurement {
   geometry::RigidTransform placement = geometry::RigidTransform::Identity();  // CAD to machine
   std::vector<simulation::ProgrammedPoint> plan;  // in measurement order
   double probe_radius = 1.0;                // mm
+  std::vector<double> probe_radii{};        // per programmed point (mm), several tips; empty: probe_radius
   double noise_sigma = 0.0;                 // mm, on each coordinate of the centre
   std::uint64_t seed = 1;                   // the noise
   // A programmed point equal to the one before it (point and normal) is a sample the probe recorded twice: the

@@ -24,6 +24,9 @@ struct FreeformStudyOptions {
   // noise.
   double repeated_fraction = 0.0;
   bool exact_repeats = true;
+  // > 0: two styli. The points on the panel's side of larger x (beyond its middle) are measured with a tip of this
+  // radius (mm); the rest with the case's 1 mm tip.
+  double second_probe_radius = 0.0;
   compensation::CompensateOptions compensate;  // method and probe radius are set by the study
 };
 
