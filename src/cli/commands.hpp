@@ -3,6 +3,7 @@
 // std::exception with a one-line message for bad input; output files are written whole or not at all.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,7 +17,8 @@ struct CompensateArgs {
   std::string cad, points, output, json, report, method = "cad";
   std::string units;           // of the point file (mm or inch); empty: mm, or what a DMIS file says
   std::string initial_transform;  // T.txt: 4 × 4, CAD → machine (io/transform_file.hpp); empty: identity
-  double probe_radius = 0.0;   // in the points' unit
+  // In the points' unit: every row's, or the default for rows without their own (a column r, DMIS sensors, QIF).
+  std::optional<double> probe_radius;
   bool accept_doubtful_registration = false;  // compensation::RegisterOptions::accept_doubtful
   bool quiet = false;
 };
@@ -26,7 +28,7 @@ struct FitArgs {
   std::string cad, points, output, json;
   std::string units;           // as CompensateArgs
   std::string initial_transform;  // as CompensateArgs
-  double probe_radius = 0.0;   // in the points' unit
+  std::optional<double> probe_radius;  // as CompensateArgs
   bool accept_doubtful_registration = false;  // as CompensateArgs
   bool quiet = false;
 };

@@ -46,22 +46,55 @@ struct Loaded {
   io::PointTable table;
   cad::Model model;
   io::RunInputs inputs;  // the probe radius in mm
+  std::vector<double> radii;  // each row's tip radius, mm (empty: inputs.probe_radius for every row)
   geometry::RigidTransform initial = geometry::RigidTransform::Identity();  // CAD → machine, the registration's start
   double seconds = 0.0;
 };
 
+// Each row's tip radius in mm: its own where the file gives one, else the default (--probe-radius, mm). A row with
+// neither is an error naming its line; so is a file without radii and no default.
+std::vector<double> tip_radii(const io::PointTable& t, std::optional<double> default_mm, const std::string& path) {
+  if (!t.radii) {
+    if (!default_mm) {
+      throw std::invalid_argument("--probe-radius is needed: " + path +
+                                  " gives no tip radius of its own (a column r, DMIS SNSDEF/SNSLCT or QIF ProbeRadius)");
+    }
+    return {};
+  }
+  std::vector<double> radii = *t.radii;
+  for (std::size_t k = 0; k < radii.size(); ++k) {
+    if (!std::isnan(radii[k])) continue;
+    if (!default_mm) {
+      throw InputError(path + ":" + std::to_string(t.line[k]) +
+                       ": this point has no tip radius (its r is empty) and no --probe-radius gives a default");
+    }
+    radii[k] = *default_mm;
+  }
+  return radii;
+}
+
 // The load step: the points (in their unit: --units, a DMIS UNITS statement, else mm) and the CAD model. The
 // probe radius is in the points' unit, as a measurement program in inches states its styli.
-Loaded load(const std::string& cad_path, const std::string& points_path, double r, const std::string& units,
-            const std::string& initial_transform) {
-  check_probe_radius(r);
+Loaded load(const std::string& cad_path, const std::string& points_path, std::optional<double> r,
+            const std::string& units, const std::string& initial_transform) {
+  if (r) check_probe_radius(*r);
   Loaded l;
   if (!initial_transform.empty()) l.initial = io::read_transform(initial_transform);
   std::optional<io::LengthUnit> declared;
   if (!units.empty()) declared = io::length_unit(units);
   l.table = io::read_points(points_path, declared);
+  std::optional<double> default_mm;
+  if (r) default_mm = *r * l.table.unit.mm;
+  l.radii = tip_radii(l.table, default_mm, points_path);
   l.model = cad::Model::load(cad_path);
-  l.inputs = {.cad = cad_path, .points = points_path, .points_unit = l.table.unit, .probe_radius = r * l.table.unit.mm};
+  l.inputs = {.cad = cad_path, .points = points_path, .points_unit = l.table.unit, .probe_radius = default_mm};
+  if (l.radii.empty()) {
+    l.inputs.tip_radii = {*default_mm};
+  } else {
+    l.inputs.tip_radii = l.radii;
+    std::sort(l.inputs.tip_radii.begin(), l.inputs.tip_radii.end());
+    l.inputs.tip_radii.erase(std::unique(l.inputs.tip_radii.begin(), l.inputs.tip_radii.end()), l.inputs.tip_radii.end());
+  }
   l.seconds = l.run.seconds();
   return l;
 }
@@ -71,7 +104,8 @@ compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Met
   compensation::CompensateOptions o;
   o.method = method;
   o.accept_doubtful_registration = accept_doubtful;
-  o.probe_radius = l.inputs.probe_radius;
+  o.probe_radius = l.inputs.tip_radii.front();
+  o.probe_radii = l.radii;
   o.registration.initial = l.initial;
   o.progress = Progress{Stopwatch(), quiet};
   std::optional<std::span<const Vector3>> normals;

@@ -172,7 +172,8 @@ int run_plan(const std::string& part, double spacing, const std::string& face_li
 }  // namespace
 
 constexpr const char* kProbeRadiusHelp =
-    "Tip radius, in the points' unit (mm unless --units or the DMIS file says otherwise)";
+    "Tip radius, in the points' unit (mm unless --units or the file says otherwise): of every point, or of those "
+    "without one of their own (a column r, DMIS SNSDEF/SNSLCT, QIF ProbeRadius); needed unless every point has one";
 
 constexpr const char* kUnitsHelp =
     "Length unit of the point file, mm or inch (default: mm, or the DMIS file's UNITS statement, which must agree); "
@@ -276,7 +277,7 @@ int main(int argc, char** argv) {
                          "RAW.csv (header naming x,y,z, optional i,j,k; other columns carried) or RAW.dmo (DMIS "
                          "FA(label)=FEAT/POINT,CART,x,y,z,i,j,k)")
       ->required();
-  compensate->add_option("--probe-radius", comp.probe_radius, kProbeRadiusHelp)->required();
+  compensate->add_option("--probe-radius", comp.probe_radius, kProbeRadiusHelp);
   compensate->add_option("--units", comp.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
   compensate->add_option("--initial-transform", comp.initial_transform, kInitialTransformHelp);
   compensate->add_flag("--accept-doubtful-registration", comp.accept_doubtful_registration, kAcceptDoubtfulHelp);
@@ -296,7 +297,7 @@ int main(int argc, char** argv) {
       "fit", "The as-measured part surfaces (fitted contact surfaces, machine frame) as NURBS in IGES or STEP.");
   fit->add_option("--cad", fit_args.cad, "CAD file")->required();
   fit->add_option("--points", fit_args.points, "RAW.csv or RAW.dmo")->required();
-  fit->add_option("--probe-radius", fit_args.probe_radius, kProbeRadiusHelp)->required();
+  fit->add_option("--probe-radius", fit_args.probe_radius, kProbeRadiusHelp);
   fit->add_option("--units", fit_args.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
   fit->add_option("--initial-transform", fit_args.initial_transform, kInitialTransformHelp);
   fit->add_flag("--accept-doubtful-registration", fit_args.accept_doubtful_registration, kAcceptDoubtfulHelp);

@@ -40,9 +40,13 @@ std::string row_label(const PointTable& t, std::size_t k) {
 }  // namespace
 
 std::string compensated_csv(const PointTable& t, const compensation::CompensationResult& r) {
-  const std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "u", "face", "status"};
+  // The tip radius of each row when the input gave any (the default filled in where a row's was empty).
+  const bool radius_column = t.radii.has_value();
+  std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "u", "face", "status"};
+  if (radius_column) ours.push_back("r");
   std::ostringstream out;
-  out << "x,y,z,nx,ny,nz,deviation,u,face,status" << t.carried_header(ours) << '\n';
+  for (std::size_t c = 0; c < ours.size(); ++c) out << (c ? "," : "") << ours[c];
+  out << t.carried_header(ours) << '\n';
   const double scale = 1.0 / t.unit.mm;  // mm → the input's unit
   for (std::size_t k = 0; k < r.points.size(); ++k) {
     const compensation::CompensatedPoint& p = r.points[k];
@@ -56,6 +60,7 @@ std::string compensated_csv(const PointTable& t, const compensation::Compensatio
       out << ",,,,,,,," << (p.face >= 0 ? std::to_string(p.face) : "") << ',';
     }
     out << compensation::to_string(p.status);
+    if (radius_column) out << ',' << mm(scale * p.radius);
     out << t.carried_fields(k);
     out << '\n';
   }
@@ -91,8 +96,10 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
   const Eigen::Matrix4d M = r.registration.transform.matrix();
   j << "{\"method\": \"" << compensation::to_string(r.method) << "\", \"units\": \"mm\",\n \"inputs\": {\"cad\": "
     << json_string(inputs.cad) << ", \"points\": " << json_string(inputs.points) << ", \"points_unit\": \""
-    << inputs.points_unit.name << "\", \"probe_radius\": " << fmt("%.9g", inputs.probe_radius)
-    << "},\n \"transform\": [";
+    << inputs.points_unit.name << "\", \"probe_radius\": "
+    << (inputs.probe_radius ? fmt("%.9g", *inputs.probe_radius) : std::string("null")) << ", \"tip_radii\": [";
+  for (std::size_t k = 0; k < inputs.tip_radii.size(); ++k) j << (k ? ", " : "") << fmt("%.9g", inputs.tip_radii[k]);
+  j << "]},\n \"transform\": [";
   for (int a = 0; a < 4; ++a) {
     j << (a ? ",\n               [" : "[");
     for (int b = 0; b < 4; ++b) j << (b ? ", " : "") << fmt("%.15g", M(a, b));

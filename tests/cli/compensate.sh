@@ -51,7 +51,7 @@ check "awk -F, 'NR==FNR{if(FNR>1){x[FNR]=\$1;y[FNR]=\$2;z[FNR]=\$3;d[FNR]=\$7;u[
   a=\$3*25.4-z[FNR]; if(a<0)a=-a; if(a>e)e=a; a=\$7*25.4-d[FNR]; if(a<0)a=-a; if(a>e)e=a;
   a=\$8*25.4-u[FNR]; if(a<0)a=-a; if(a>e)e=a; if(e>m)m=e} END{exit !(FNR==7201 && m<1e-6)}' '$W/out.csv' '$W/out_inch.csv'" \
   "inch input: every row equals the mm run's to 1e-6 mm, in inches"
-check "grep -q '\"points_unit\": \"inch\", \"probe_radius\": 1}' '$W/inch.json'" "inch input: the JSON names the unit and the radius in mm"
+check "grep -q '\"points_unit\": \"inch\", \"probe_radius\": 1, \"tip_radii\": \[1\]}' '$W/inch.json'" "inch input: the JSON names the unit and the radius in mm"
 check "[ \"\$(grep -o '\"deviation\": {[^}]*}' '$W/inch.json')\" = \"\$(grep -o '\"deviation\": {[^}]*}' '$W/stats.json')\" ]" "inch input: JSON deviations in mm, as the mm run's"
 "$P" compensate --cad "$N0" --points "$W/raw_inch.csv" --units inch --probe-radius 0.0393700787401575 \
   --output "$W/out_inch.dmo" --quiet || { echo "FAIL: compensate --units inch to DMIS"; fail=1; }

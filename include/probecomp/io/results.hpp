@@ -2,15 +2,17 @@
 // The compensation's results as files (DESIGN.md §5): every input row back, in order, as CSV or DMIS; the run's
 // statistics as JSON; a summary page in HTML. Lengths with 9 decimals (nm), unit vectors with 12.
 
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/io/point_table.hpp"
 
 namespace probecomp::io {
 
-// x,y,z,nx,ny,nz,deviation,u,face,status and the input's other columns (renamed input_NAME where they clash with
-// ours), lengths in the input's unit. A point that was not computed keeps its row: empty fields and the reason in
+// x,y,z,nx,ny,nz,deviation,u,face,status, r (each row's tip radius) when the input gave radii, and the input's other
+// columns (renamed input_NAME where they clash with ours), lengths in the input's unit. A point that was not computed keeps its row: empty fields and the reason in
 // `status`.
 [[nodiscard]] std::string compensated_csv(const PointTable& input, const compensation::CompensationResult& result);
 
@@ -25,11 +27,13 @@ struct FileTimings {
   double read = 0.0, write = 0.0, total = 0.0;
 };
 
-// What the run was given: the files, the points' unit and the probe radius (mm).
+// What the run was given: the files, the points' unit, the probe radius given for every point or as the default
+// (mm; none when each point has its own) and the distinct tip radii of the points (mm, ascending).
 struct RunInputs {
   std::string cad, points;
   LengthUnit points_unit = kMillimetre;
-  double probe_radius = 0.0;
+  std::optional<double> probe_radius;
+  std::vector<double> tip_radii{};
 };
 
 // The inputs, the transform (CAD to machine), the registration (converged: bool; status; stop_reason), each face's
