@@ -1,5 +1,6 @@
 # Scores compensate's output against simulate's truth: awk -F, -f score.awk truth.csv out.csv
-# Rows are matched by the `point` column (simulate's raw.csv carries it through compensate). The error of a row
+# Rows are matched by the `point` column (simulate's raw.csv carries it through compensate), or by their order
+# where the output has none (a file that went through a format without carried columns, QIF). The error of a row
 # is (compensated − true contact)·(actual outward normal), mm: the compensation error of DESIGN.md §3. Prints one
 # line per status: count, mean, std and largest |error| in µm, and "all" over every computed row.
 NR == FNR {
@@ -9,7 +10,7 @@ NR == FNR {
 }
 FNR == 1 { for (c = 1; c <= NF; ++c) o[$c] = c; next }
 {
-  s = $(o["status"]); p = $(o["point"])
+  s = $(o["status"]); p = ("point" in o) ? $(o["point"]) : FNR - 1
   if ($(o["x"]) == "") { n[s] += 0; empty[s]++; next }
   e = ($(o["x"]) - tx[p]) * tn1[p] + ($(o["y"]) - ty[p]) * tn2[p] + ($(o["z"]) - tz[p]) * tn3[p]
   add(s, e); add("all", e)
