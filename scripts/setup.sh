@@ -12,6 +12,8 @@ packages=(
   libocct-data-exchange-dev     # OpenCASCADE: STEP and IGES readers and writers
   libnanoflann-dev              # k-d tree for nearest seeds
   libcli11-dev                  # command line
+  libpugixml-dev                # XML: QIF 3.0 point files in and out
+  libxml2-utils                 # xmllint: the tests validate every QIF file written against the QIF 3.0 schemas
   libtbb-dev                    # oneTBB threads
   libgtest-dev                  # GoogleTest
   libbenchmark-dev              # Google Benchmark
