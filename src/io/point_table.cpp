@@ -7,44 +7,12 @@
 #include <limits>
 #include <sstream>
 
+#include "probecomp/io/format.hpp"
 #include "probecomp/io/text.hpp"
 
 namespace probecomp::io {
 
 namespace {
-
-// Fields of one line, split at `separator` outside double quotes (RFC 4180: a quoted field may hold the separator,
-// and "" inside it is one quote), each with surrounding blanks and its quotes removed. Throws on an unclosed quote.
-std::vector<std::string> split(const std::string& line, char separator, const std::string& where) {
-  std::vector<std::string> out;
-  std::string field;
-  bool quoted = false, was_quoted = false;
-  for (std::size_t k = 0; k < line.size(); ++k) {
-    const char c = line[k];
-    if (quoted) {
-      if (c == '"' && k + 1 < line.size() && line[k + 1] == '"') {
-        field += '"';
-        ++k;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        field += c;
-      }
-    } else if (c == '"' && trim(field).empty()) {
-      quoted = was_quoted = true;
-      field.clear();
-    } else if (c == separator) {
-      out.push_back(was_quoted ? field : trim(field));
-      field.clear();
-      was_quoted = false;
-    } else if (!(was_quoted && (c == ' ' || c == '\t'))) {
-      field += c;
-    }
-  }
-  if (quoted) throw InputError(where + "a quote is not closed");
-  out.push_back(was_quoted ? field : trim(field));
-  return out;
-}
 
 // The separator other software writes: the one of ',', ';' and tab that the header (outside quotes) holds most of.
 // ';' and tab come from spreadsheets set to a decimal comma.
@@ -89,12 +57,12 @@ std::string PointTable::carried_fields(std::size_t k) const {
   return out;
 }
 
-PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit) {
+PointTable read_point_csv(const std::filesystem::path& path, std::optional<LengthUnit> declared) {
   const std::string name = path.string();
   std::ifstream in(path);
   if (!in) throw InputError(name + ": cannot be opened (missing or unreadable)");
   PointTable t;
-  t.unit = unit;
+  LengthUnit unit = declared.value_or(kMillimetre);
   std::string line;
   int number = 0;
   int ix = -1, iy = -1, iz = -1, ii = -1, ij = -1, ik = -1, ir = -1;
@@ -107,10 +75,22 @@ PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit) {
     // A UTF-8 byte-order mark, as spreadsheet programs write, is not part of the first column's name.
     if (number == 1 && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);
     const std::string text = trim(line);  // and CRLF's CR
-    if (text.empty() || text[0] == '#') continue;
     const std::string where = name + ":" + std::to_string(number) + ": ";
+    if (!have_header && text.starts_with('#') && lower(trim(text.substr(1))).starts_with("lengths in ")) {
+      // The file's own statement of its unit, as points_csv writes it: what --units would otherwise have to say.
+      const std::string stated = trim(trim(text.substr(1)).substr(std::string("lengths in ").size()));
+      const std::optional<LengthUnit> u = length_unit(stated);
+      if (!u) throw InputError(where + "unknown length unit '" + stated + "' (known: mm, cm, meter, inch, feet)");
+      if (declared && !(*u == *declared)) {
+        throw InputError(where + "the file says its lengths are in " + u->name + ", not in " + declared->name +
+                         " as --units says");
+      }
+      unit = *u;
+      continue;
+    }
+    if (text.empty() || text[0] == '#') continue;
     if (!have_header) separator = detect_separator(text);
-    std::vector<std::string> fields = split(text, separator, where);
+    std::vector<std::string> fields = split_fields(text, separator, where);
     if (!have_header) {
       t.columns = fields;
       for (int c = 0; c < static_cast<int>(fields.size()); ++c) {
@@ -161,11 +141,54 @@ PointTable read_point_csv(const std::filesystem::path& path, LengthUnit unit) {
     t.rows.push_back(std::move(fields));
     t.line.push_back(number);
   }
+  t.unit = unit;
   if (!have_header) throw InputError(name + ": no header line (expected columns x,y,z)");
   if (t.points.empty()) throw InputError(name + ": no points");
   if (ii >= 0) t.normals = std::move(normals);
   if (ir >= 0) t.radii = std::move(radii);
   return t;
+}
+
+int column_index(const PointTable& t, const std::string& name) {
+  for (std::size_t c = 0; c < t.columns.size(); ++c) {
+    if (lower(t.columns[c]) == name) return static_cast<int>(c);
+  }
+  return -1;
+}
+
+double row_value(const PointTable& t, int c, std::size_t k, double fallback) {
+  if (c < 0 || k >= t.rows.size() || static_cast<std::size_t>(c) >= t.rows[k].size()) return fallback;
+  return parse_number(t.rows[k][static_cast<std::size_t>(c)]).value_or(fallback);
+}
+
+std::string points_csv(const PointTable& t) {
+  const double scale = 1.0 / t.unit.mm;  // mm → the table's unit, for a table without the rows' text
+  const int ix = column_index(t, "x"), iy = column_index(t, "y"), iz = column_index(t, "z");
+  const int ii = column_index(t, "i"), ij = column_index(t, "j"), ik = column_index(t, "k"), ir = column_index(t, "r");
+  std::vector<std::string> ours{"x", "y", "z"};
+  if (t.normals) ours.insert(ours.end(), {"i", "j", "k"});
+  if (t.radii) ours.push_back("r");
+  std::ostringstream out;
+  if (!(t.unit == kMillimetre)) out << "# lengths in " << t.unit.name << '\n';
+  for (std::size_t c = 0; c < ours.size(); ++c) out << (c ? "," : "") << ours[c];
+  out << t.carried_header(ours) << '\n';
+  for (std::size_t k = 0; k < t.points.size(); ++k) {
+    const Point3& x = t.points[k];
+    out << exact(row_value(t, ix, k, scale * x.x())) << ',' << exact(row_value(t, iy, k, scale * x.y())) << ','
+        << exact(row_value(t, iz, k, scale * x.z()));
+    if (t.normals) {
+      const Vector3& n = (*t.normals)[k];
+      out << ',' << exact(row_value(t, ii, k, n.x())) << ',' << exact(row_value(t, ij, k, n.y())) << ','
+          << exact(row_value(t, ik, k, n.z()));
+    }
+    if (t.radii) {
+      const double r = (*t.radii)[k];
+      out << ',' << (std::isnan(r) ? std::string() : exact(row_value(t, ir, k, scale * r)));
+    }
+    if (!t.rows.empty()) out << t.carried_fields(k);
+    out << '\n';
+  }
+  return out.str();
 }
 
 }  // namespace probecomp::io

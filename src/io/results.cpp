@@ -26,17 +26,6 @@ std::string html_escaped(const std::string& text) {
   return out;
 }
 
-// The output's label for row k: the input's label or id column, else P1, P2, ...
-std::string row_label(const PointTable& t, std::size_t k) {
-  for (std::size_t c = 0; c < t.columns.size(); ++c) {
-    const std::string n = lower(t.columns[c]);
-    if (n == "label" || n == "id") return t.rows[k][c];
-  }
-  std::string label = "P";
-  label += std::to_string(k + 1);
-  return label;
-}
-
 }  // namespace
 
 std::string compensated_csv(const PointTable& t, const compensation::CompensationResult& r) {
@@ -77,10 +66,19 @@ std::string compensated_dmis(const PointTable& t, const compensation::Compensati
       << ", + outside), its standard uncertainty u\n"
       << "$$ along the normal (k = 1, " << u << "), face and status\n";
   out << dmis_units(t.unit);
+  // The tips, when the input gave each point its own: as the input's sensors, with the radius each point was
+  // compensated with.
+  std::vector<double> radii;
+  if (t.radii) {
+    for (const compensation::CompensatedPoint& p : r.points) radii.push_back(scale * p.radius);
+  }
+  DmisTips tips(t, radii);
+  out << tips.definitions();
   for (std::size_t k = 0; k < r.points.size(); ++k) {
     const compensation::CompensatedPoint& p = r.points[k];
-    const std::string label = row_label(t, k);
+    const std::string label = dmis_label(t, k);
     if (p.computed()) {
+      if (t.radii) out << tips.select(k);
       out << dmis_point(label, p.contact, p.normal, t.unit);
       out << "$$ deviation=" << mm(scale * p.deviation) << " u=" << mm(scale * p.uncertainty) << " face=" << p.face << " status=" << compensation::to_string(p.status) << '\n';
     } else {

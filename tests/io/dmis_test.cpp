@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
+
+#include "probecomp/io/results.hpp"
 
 namespace probecomp {
 namespace {
@@ -114,6 +117,125 @@ TEST(Dmis, PointsWrittenInInchesReadBackInMillimetres) {
   EXPECT_NE(text.find("UNITS/INCH,ANGDEC\nFA(P)=FEAT/POINT,CART,1.000000000,-0.100000000,0.005000000,"), std::string::npos) << text;
   const io::PointTable t = io::read_point_dmis(write("u5.dmo", text));
   EXPECT_NEAR((t.points[0] - Point3(25.4, -2.54, 0.127)).norm(), 0.0, 1e-12);
+}
+
+// Issue 21: tip definitions (SNSDEF) and selections (SNSLCT) give each measured point its tip radius.
+TEST(Dmis, SensorsGiveEachPointItsTipRadiusInTheUnitInForce) {
+  const io::PointTable t = io::read_point_dmis(write("s1.dmo",
+                                                     "UNITS/INCH,ANGDEC\n"
+                                                     "FA(P0)=FEAT/POINT,CART,0,0,1,0,0,1\n"
+                                                     "S(BIG)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,1,6,0.04\n"
+                                                     "s(Small) = snsdef/probe, fixed, cart, 10, 0, -2, 0, 0, 1, $\n"
+                                                     "  0.02\n"
+                                                     "S(DISC1)=SNSDEF/PROBE,FIXED,POL,0,0,0,0,1,4.5,0.5,DISC,0.1\n"
+                                                     "SNSLCT/S(BIG)\n"
+                                                     "FA(P1)=FEAT/POINT,CART,1,2,3,0,0,1\n"
+                                                     "SNSLCT/S(SMALL)\n"
+                                                     "FA(P2)=FEAT/POINT,CART,4,5,6,0,0,1\n"
+                                                     "SA(BIG)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,1,6,0.0398\n"
+                                                     "SNSLCT/SA(BIG)\n"
+                                                     "FA(P3)=FEAT/POINT,CART,7,8,9,0,0,1\n"));
+  EXPECT_EQ(t.columns, (std::vector<std::string>{"label", "x", "y", "z", "i", "j", "k", "r", "tip"}));
+  ASSERT_TRUE(t.radii.has_value());
+  ASSERT_EQ(t.radii->size(), 4u);
+  EXPECT_TRUE(std::isnan((*t.radii)[0]));  // measured before any selection: the run's default
+  EXPECT_EQ((*t.radii)[1], 25.4 * 0.02);   // half the diameter, in inches
+  EXPECT_EQ((*t.radii)[2], 25.4 * 0.01);
+  EXPECT_EQ((*t.radii)[3], 25.4 * 0.0199);  // the calibrated (actual) sensor, defined later
+  EXPECT_EQ(t.rows[0][7], "");
+  EXPECT_EQ(t.rows[1][7], "0.02");
+  EXPECT_EQ(t.rows[1][8], "BIG");
+  EXPECT_EQ(t.rows[2][8], "Small");  // names are matched without case, kept as defined
+  EXPECT_EQ(t.sensor_definitions.at("Small"), "snsdef/probe,fixed,cart,10,0,-2,0,0,1,0.02");
+  // The label and the tip are carried to outputs; r is the row's radius.
+  EXPECT_EQ(t.carried_header({"x"}), ",label,tip");
+}
+
+TEST(Dmis, FilesWithoutSelectionsReadAsBefore) {
+  const io::PointTable t = io::read_point_dmis(
+      write("s2.dmo", "S(BIG)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,1,6,2\nFA(P1)=FEAT/POINT,CART,1,2,3,0,0,1\n"));
+  EXPECT_EQ(t.columns, (std::vector<std::string>{"label", "x", "y", "z", "i", "j", "k"}));
+  EXPECT_FALSE(t.radii.has_value());
+}
+
+TEST(Dmis, SensorErrorsNameTheFileAndLine) {
+  auto message = [](const std::string& name, const std::string& text) {
+    try {
+      (void)io::read_point_dmis(write(name, text));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string point = "FA(P1)=FEAT/POINT,CART,1,2,3\n";
+  EXPECT_NE(message("e1.dmo", "S(A)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,1,6,2\nSNSLCT/S(B)\n" + point)
+                .find("e1.dmo:2: SNSLCT selects S(B), which no SNSDEF before it defines"),
+            std::string::npos);
+  EXPECT_NE(message("e2.dmo", "SNSLCT/S(A)\nS(A)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,1,6,2\n" + point).find("e2.dmo:1: SNSLCT selects S(A)"),
+            std::string::npos);
+  for (const std::string bad : {"0", "-1", "abc", "nan"}) {
+    EXPECT_NE(message("e3.dmo", "$$ x\nS(A)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,1,6," + bad + "\n" + point)
+                  .find("e3.dmo:2: sensor S(A): the ball diameter (the last number) must be a positive number, not '" + bad + "'"),
+              std::string::npos)
+        << bad;
+  }
+  EXPECT_NE(message("e4.dmo", "S(A)=SNSDEF/PROBE,INDEX,POL,0,x,0,0,1,6,2\n" + point).find("e4.dmo:1: sensor S(A): 'x' is not a number"),
+            std::string::npos);
+  // A form probecomp does not read is an error only where it is selected.
+  const std::string disc = "S(D)=SNSDEF/PROBE,FIXED,POL,0,0,0,0,1,115,12,DISC,3\n";
+  EXPECT_EQ(message("e5.dmo", disc + point), "no error");
+  EXPECT_NE(message("e6.dmo", disc + "SNSLCT/S(D)\n" + point)
+                .find("e6.dmo:2: SNSLCT selects S(D), whose definition (line 1) probecomp cannot read: its tip is a DISC"),
+            std::string::npos);
+  EXPECT_NE(message("e7.dmo", "S(V)=SNSDEF/PROBE,FIXED,VEC,0,0,1,100,2\nSNSLCT/S(V)\n" + point).find("e7.dmo:2: SNSLCT selects S(V)"),
+            std::string::npos);
+}
+
+TEST(Dmis, OutputsDefineEachTipOnceAndSelectItWhenItChanges) {
+  io::PointTable t;
+  t.columns = {"x", "y", "z"};
+  for (int k = 0; k < 4; ++k) {
+    t.points.emplace_back(k, 0, 0);
+    t.rows.push_back({std::to_string(k), "0", "0"});
+    t.line.push_back(k + 2);
+  }
+  t.radii = std::vector<double>{1, 0.25, 0.25, 1};
+  const std::string text = io::points_dmis(t, "in.csv");
+  EXPECT_NE(text.find("UNITS/MM,ANGDEC\n$$ S(TIP1): the ball's diameter as measured with; the probe's orientation and length "
+                      "are not known here (neutral INDEX,POL,0,0,0,0,1,0)\nS(TIP1)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,1,0,2\n"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("SNSLCT/S(TIP1)\nFA(P1)=FEAT/POINT,CART,0,0,0\nSNSLCT/S(TIP2)\nFA(P2)=FEAT/POINT,CART,1,0,0\n"
+                      "FA(P3)=FEAT/POINT,CART,2,0,0\nSNSLCT/S(TIP1)\nFA(P4)"),
+            std::string::npos)
+      << text;
+  const io::PointTable back = io::read_point_dmis(write("o1.dmo", text));
+  EXPECT_EQ(*back.radii, *t.radii);
+  // A tip name met with two radii is two tips; a row without a radius after one with is refused.
+  t.columns.push_back("tip");
+  for (auto& row : t.rows) row.push_back("T");
+  EXPECT_NE(io::points_dmis(t, "in.csv").find("S(T_2)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,1,0,0.5\n"), std::string::npos);
+  (*t.radii)[2] = std::nan("");
+  EXPECT_THROW((void)io::points_dmis(t, "in.csv"), InputError);
+}
+
+TEST(Dmis, CompensatedOutputStatesTheTipsOfAnInputThatGaveThem) {
+  const io::PointTable in = io::read_point_dmis(write("c1.dmo",
+                                                      "S(A)=SNSDEF/PROBE,INDEX,POL,0,90,0,0,1,150,2\n"
+                                                      "SNSLCT/S(A)\nFA(P1)=FEAT/POINT,CART,1,2,3,0,0,1\n"
+                                                      "FA(P2)=FEAT/POINT,CART,1,2,4,0,0,1\n"));
+  compensation::CompensationResult r;
+  for (int k = 0; k < 2; ++k) {
+    compensation::CompensatedPoint p;
+    p.status = compensation::PointStatus::Ok;
+    p.normal = Vector3(0, 0, 1);
+    p.radius = 1.0;
+    r.points.push_back(p);
+  }
+  const std::string text = io::compensated_dmis(in, r, "c1.dmo");
+  EXPECT_NE(text.find("UNITS/MM,ANGDEC\nS(A)=SNSDEF/PROBE,INDEX,POL,0,90,0,0,1,150,2\nSNSLCT/S(A)\nFA(P1)="), std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("SNSLCT", text.find("FA(P1)")), std::string::npos) << text;  // selected once
 }
 
 }  // namespace

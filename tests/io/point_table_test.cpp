@@ -17,7 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // Writes `bytes` to a file of its own and reads it back as a point table.
-PointTable read_text(const std::string& bytes, LengthUnit unit = kMillimetre) {
+PointTable read_text(const std::string& bytes, std::optional<LengthUnit> unit = std::nullopt) {
   const fs::path p = fs::temp_directory_path() /
                      ("probecomp_point_table_" +
                       std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + ".csv");
@@ -81,6 +81,25 @@ TEST(ReadPointCsv, WhatItStillRefusesNamesTheLine) {
   // With ',' between fields a decimal comma would be two fields: the count says so.
   EXPECT_NE(message("x,y,z\n1,5,2,3\n").find(":2: expected 3 fields, found 4"), std::string::npos);
   EXPECT_NE(message("x;y;z\n1,2,3;2;3\n").find("is not a number: '1,2,3'"), std::string::npos);
+}
+
+// Issue 21: a CSV states its unit in a comment before the header, as points_csv writes it.
+TEST(ReadPointCsv, ALengthsCommentStatesTheUnit) {
+  const PointTable t = read_text("# lengths in inch\nx,y,z,r\n1,2,3,0.5\n# lengths in mm (after the header: a comment)\n");
+  EXPECT_TRUE(t.unit == kInch);
+  EXPECT_EQ(t.points[0], Point3(25.4 * 1, 25.4 * 2, 25.4 * 3));
+  EXPECT_EQ((*t.radii)[0], 25.4 * 0.5);
+  try {
+    (void)read_text("#  Lengths in furlongs\nx,y,z\n1,2,3\n");
+    ADD_FAILURE() << "an unknown unit was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(".csv:1: unknown length unit 'furlongs'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(PointsCsv, EveryRowWithItsNumbersAsReadAndTheCarriedColumns) {
+  const PointTable t = read_text("id;x;y;z;r;i;j;k\n\"a;b\";1,5;-0;1e-3;;0;0;2\n7;2;3;4;0,25;1;0;0\n");
+  EXPECT_EQ(points_csv(t), "x,y,z,i,j,k,r,id\n1.5,0,0.001,0,0,2,,a;b\n2,3,4,1,0,0,0.25,7\n");
 }
 
 }  // namespace

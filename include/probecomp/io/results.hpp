@@ -18,7 +18,9 @@ namespace probecomp::io {
 
 // One DMIS FA(label) point per computed point (labels from the input's label or id column, else P1, P2, ...),
 // with its deviation, face and status in a comment; a comment line for each point not computed. Lengths in the
-// input's unit, stated by a UNITS statement first.
+// input's unit, stated by a UNITS statement first. When the input gave the points their own radii, the tips follow
+// it: an SNSDEF per tip and an SNSLCT where the tip changes (io::DmisTips), with the radius each point was
+// compensated with.
 [[nodiscard]] std::string compensated_dmis(const PointTable& input, const compensation::CompensationResult& result,
                                            const std::string& source);
 

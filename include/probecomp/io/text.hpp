@@ -1,5 +1,6 @@
 #pragma once
-// Small text helpers for the point-file readers and the commands: surrounding blanks off, ASCII case folding.
+// Small text helpers for the point-file readers and the commands: surrounding blanks off, ASCII case folding, CSV
+// fields.
 
 #include <algorithm>
 #include <cctype>
@@ -7,6 +8,9 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
+
+#include "probecomp/error.hpp"
 
 namespace probecomp::io {
 
@@ -41,6 +45,41 @@ namespace probecomp::io {
     out += c;
   }
   return out + '"';
+}
+
+// Fields of one line, split at `separator` outside double quotes (RFC 4180: a quoted field may hold the separator,
+// and "" inside it is one quote), each with surrounding blanks and its quotes removed. Throws InputError (`where`
+// and the cause) on an unclosed quote. The inverse of joining csv_field()s with the separator.
+[[nodiscard]] inline std::vector<std::string> split_fields(const std::string& line, char separator,
+                                                           const std::string& where) {
+  std::vector<std::string> out;
+  std::string field;
+  bool quoted = false, was_quoted = false;
+  for (std::size_t k = 0; k < line.size(); ++k) {
+    const char c = line[k];
+    if (quoted) {
+      if (c == '"' && k + 1 < line.size() && line[k + 1] == '"') {
+        field += '"';
+        ++k;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        field += c;
+      }
+    } else if (c == '"' && trim(field).empty()) {
+      quoted = was_quoted = true;
+      field.clear();
+    } else if (c == separator) {
+      out.push_back(was_quoted ? field : trim(field));
+      field.clear();
+      was_quoted = false;
+    } else if (!(was_quoted && (c == ' ' || c == '\t'))) {
+      field += c;
+    }
+  }
+  if (quoted) throw InputError(where + "a quote is not closed");
+  out.push_back(was_quoted ? field : trim(field));
+  return out;
 }
 
 [[nodiscard]] inline std::string upper(std::string s) {
