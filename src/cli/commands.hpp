@@ -1,6 +1,7 @@
 #pragma once
-// The commands beyond info/project/plan (DESIGN.md §5): compensate, fit, demo, simulate and study. Each returns the exit status and throws
-// std::exception with a one-line message for bad input; output files are written whole or not at all.
+// The commands beyond info/project/plan (DESIGN.md §5): compensate, fit, convert, demo, simulate and study. Each
+// returns the exit status and throws std::exception with a one-line message for bad input; output files are written
+// whole or not at all.
 
 #include <cstdint>
 #include <optional>
@@ -33,6 +34,13 @@ struct FitArgs {
   bool quiet = false;
 };
 int run_fit(const FitArgs& args);
+
+struct ConvertArgs {
+  std::string input, output;  // by extension: .csv, .dmo/.dmi/.dms (DMIS), .qif
+  std::string units;          // of the input (mm or inch); empty: mm, or what a DMIS or QIF file or a CSV comment says
+};
+// The output in the input's unit, with every row, its radius and its carried columns.
+int run_convert(const ConvertArgs& args);
 
 struct DemoArgs {
   std::string output_dir = "probecomp-demo";

@@ -14,6 +14,7 @@
 #include "probecomp/io/format.hpp"
 #include "probecomp/io/output_files.hpp"
 #include "probecomp/io/point_table.hpp"
+#include "probecomp/io/qif.hpp"
 #include "probecomp/io/results.hpp"
 #include "probecomp/io/text.hpp"
 #include "probecomp/io/transform_file.hpp"
@@ -116,12 +117,13 @@ compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Met
   return result;
 }
 
-// The write step: the points (CSV or DMIS, by the extension), the report and the statistics, all or none (standard
-// output last, once every file is in place).
+// The write step: the points (CSV, DMIS or QIF, by the extension), the report and the statistics, all or none
+// (standard output last, once every file is in place).
 void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation::CompensationResult& r) {
   const Stopwatch clock;
-  const std::string text =
-      !a.output.empty() && io::is_dmis(a.output) ? io::compensated_dmis(l.table, r, a.points) : io::compensated_csv(l.table, r);
+  const std::string text = io::is_qif(a.output)                      ? io::compensated_qif(l.table, r, a.points)
+                           : !a.output.empty() && io::is_dmis(a.output) ? io::compensated_dmis(l.table, r, a.points)
+                                                                        : io::compensated_csv(l.table, r);
   io::OutputFiles files;
   if (!a.report.empty()) files.add(a.report, io::html_report(a.cad, a.points, r));
   if (!a.output.empty()) files.add(a.output, text);

@@ -274,8 +274,8 @@ int main(int argc, char** argv) {
       "x,y,z,nx,ny,nz,deviation,u,face,status and the input's other columns (u: the standard uncertainty of the point along its normal, k = 1, mm).");
   compensate->add_option("--cad", comp.cad, "CAD file (.igs, .iges, .stp, .step)")->required();
   compensate->add_option("--points", comp.points,
-                         "RAW.csv (header naming x,y,z, optional i,j,k; other columns carried) or RAW.dmo (DMIS "
-                         "FA(label)=FEAT/POINT,CART,x,y,z,i,j,k)")
+                         "RAW.csv (header naming x,y,z, optional i,j,k; other columns carried), RAW.dmo (DMIS "
+                         "FA(label)=FEAT/POINT,CART,x,y,z,i,j,k) or RAW.qif (QIF 3.0 MeasuredPointSets)")
       ->required();
   compensate->add_option("--probe-radius", comp.probe_radius, kProbeRadiusHelp);
   compensate->add_option("--units", comp.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
@@ -285,7 +285,7 @@ int main(int argc, char** argv) {
                          "cad (default): register to the offset model, fit, offset along the fitted normal; "
                          "conventional: c - r*(i,j,k)")
       ->check(CLI::IsMember({"cad", "conventional"}));
-  compensate->add_option("--output", comp.output, "OUT.csv or OUT.dmo (default: CSV on standard output)");
+  compensate->add_option("--output", comp.output, "OUT.csv, OUT.dmo or OUT.qif (default: CSV on standard output)");
   compensate->add_option("--json", comp.json,
                          "STATS.json: transform (4x4, CAD to machine), registration, per face fit, counts by status, deviation statistics, "
                          "timings in seconds");
@@ -305,6 +305,17 @@ int main(int argc, char** argv) {
   fit->add_option("--json", fit_args.json, "STATS.json as for compensate");
   fit->add_flag("--quiet", fit_args.quiet, "No progress on standard error");
 
+  cli::ConvertArgs convert_args;
+  CLI::App* convert = app.add_subcommand(
+      "convert", "Point files between CSV, DMIS and QIF 3.0: every row, units, tip radii and carried columns kept, "
+                 "numbers exactly as read.");
+  convert->add_option("input", convert_args.input, "IN.csv, IN.dmo or IN.qif")->required();
+  convert->add_option("output", convert_args.output, "OUT.csv, OUT.dmo or OUT.qif (never the input)")->required();
+  convert->add_option("--units", convert_args.units,
+                      "Length unit of IN, mm or inch (default: mm, or what the file says: DMIS UNITS, QIF FileUnits, a "
+                      "CSV '# lengths in UNIT' line, which must agree); OUT keeps it")
+      ->check(CLI::IsMember({"mm", "inch"}));
+
   cli::DemoArgs demo_args;
   CLI::App* demo = app.add_subcommand(
       "demo", "The built-in free-form case (paper §7.3): simulate, compensate both ways, print the Table 2 comparison.");
@@ -320,6 +331,7 @@ int main(int argc, char** argv) {
     if (compensate->parsed()) return cli::run_compensate(comp);
     if (fit->parsed()) return cli::run_fit(fit_args);
     if (demo->parsed()) return cli::run_demo(demo_args);
+    if (convert->parsed()) return cli::run_convert(convert_args);
     if (info->parsed()) return run_info(part, json);
     if (project->parsed()) return run_project(part, points, project_units, output);
     if (plan->parsed()) return run_plan(part, spacing, faces, output);
