@@ -46,6 +46,27 @@ check "awk -F, 'NR > 1 { n[\$11]++ } END { exit !(n[\"1.000000000\"] > 100 && n[
   "each output row keeps its own radius"
 check "grep -q '\"probe_radius\": null, \"tip_radii\": \\[0.5, 1\\]' '$W/mixed.json'" "the JSON names both radii and no default"
 
+# QIF in -> compensate -> QIF out on the same case: the file converted to QIF 3.0 (per-point ProbeRadii), compensated
+# without --probe-radius to QIF and to CSV. The same figures as from CSV; the QIF output validates against the QIF 3.0
+# schemas, and its points are the CSV output's.
+XSD="$(dirname "$0")/../data/qif3-xsd/QIFDocument.xsd"
+"$P" convert "$W/mixed.csv" "$W/mixed.qif" || { echo "FAIL: convert the mixed file to QIF"; fail=1; }
+for out in q_out.qif q_out.csv; do
+  "$P" compensate --cad "$PANEL" --points "$W/mixed.qif" --output "$W/$out" --quiet 2>/dev/null \
+    || { echo "FAIL: compensate the mixed QIF to $out"; fail=1; }
+done
+awk -F, -f "$SCORE" "$W/truth.csv" "$W/q_out.csv" >"$W/qif_score.txt"
+echo "two styli through QIF: $(grep '^ok:' "$W/qif_score.txt")"
+check_result "awk -v rows=$rows '\$1 == \"ok:\" { ok = 1; if (\$2 < 0.99 * rows || \$7 > 2 || \$9 > 10) bad = 1 } END { exit !(ok && !bad) }' '$W/qif_score.txt'" \
+  "two styli through QIF: at least 99 % of the rows ok, within std 2 um and max 10 um of the truth"
+check "xmllint --noout --schema '$XSD' '$W/q_out.qif' 2>'$W/xmllint.err' && grep -q 'q_out.qif validates' '$W/xmllint.err'" \
+  "the compensated QIF validates against the QIF 3.0 schemas"
+xmllint --xpath "//*[local-name()='MeasuredPointSet']/*[local-name()='Points']/text()" "$W/q_out.qif" 2>/dev/null |
+  tr -s ' \n' '\n\n' | awk 'NF' | paste -d, - - - >"$W/q_points.csv"
+check "[ \$(wc -l <'$W/q_points.csv') -eq $rows ] && tail -n +2 '$W/q_out.csv' | cut -d, -f1-3 | paste -d, - '$W/q_points.csv' |
+  awk -F, '{ for (c = 1; c <= 3; ++c) { d = \$c - \$(c + 3); if (d > 1e-9 || d < -1e-9) exit 1 } }'" \
+  "the QIF output's points are the CSV output's, row for row"
+
 # An empty r takes --probe-radius; without one, the row is named.
 awk -F, -v OFS=, 'NR == 5 { $NF = "" } { print }' "$W/mixed.csv" >"$W/gap.csv"
 expect_error "gap.csv:5: this point has no tip radius" "$W/gap_out.csv" \
