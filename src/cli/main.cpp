@@ -100,7 +100,8 @@ int run_info(const std::string& part, bool json) {
 int run_project(const std::string& part, const std::string& points_file, const std::string& units,
                 const std::string& output) {
   io::check_outputs_spare_inputs({{"--output", output}}, {{"PART", part}, {"--points", points_file}});
-  const io::PointTable table = io::read_point_csv(points_file, io::length_unit(units).value_or(io::kMillimetre));
+  // Unstated, the unit is the file's own (a "# lengths in UNIT" line), else mm.
+  const io::PointTable table = io::read_point_csv(points_file, units.empty() ? std::nullopt : io::length_unit(units));
   const double scale = 1.0 / table.unit.mm;  // mm → the points' unit
   const cad::Model model = cad::read_model(part);
   const cad::ModelLocator locator(model);
@@ -209,8 +210,9 @@ int main(int argc, char** argv) {
   project->add_option("--cad", part, "CAD file")->required();
   project->add_option("--points", points, "CSV with a header naming x,y,z (other columns are carried)")->required();
   project->add_option("--output", output, "Output CSV (default: standard output)");
-  std::string project_units = "mm";
-  project->add_option("--units", project_units, "Length unit of the point file and the output, mm (default) or inch")
+  std::string project_units;
+  project->add_option("--units", project_units,
+                      "Length unit of the point file and the output, mm or inch (default: the file's own, else mm)")
       ->check(CLI::IsMember({"mm", "inch"}));
 
   CLI::App* plan = app.add_subcommand("plan", "Nominal measurement points with outward normals on the model's faces.");
