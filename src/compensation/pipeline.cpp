@@ -38,6 +38,27 @@ nurbs::Surface fit_start(const nurbs::Surface& offset_face, const geometry::Rigi
   return s;
 }
 
+// Raw centre k as the smallest tip's centre would be: a larger tip's moved in by the difference of their radii
+// along the outward normal (machine frame) of `fit` at `at` (the face's fitted centre surface, whose outward side
+// is `outward`), or where there is no fit or it has no normal there, of the registered nominal face at the
+// point's correspondence. Exact when the normal is the actual surface's.
+Point3 as_smallest_tip(const PreparedModel& prepared, const registration::RegistrationResult& registration,
+                       std::span<const Point3> raw, std::size_t k, const nurbs::Surface* fit = nullptr,
+                       int outward = 1, fitting::SurfaceParameter at = {}) {
+  const geometry::TipRadii& radii = prepared.radii;
+  if (radii.uniform() || radii[k] == radii.smallest()) return raw[k];
+  Vector3 normal = Vector3::Zero();
+  if (fit != nullptr) {
+    const nurbs::UnitNormal n = nurbs::unit_normal(*fit, at.u, at.v);
+    if (n.status != nurbs::UnitNormal::Status::Degenerate) normal = static_cast<double>(outward) * n.n;
+  }
+  if (normal == Vector3::Zero()) {
+    const registration::PointMatch& m = registration.matches[k];
+    normal = registration.transform.linear() * prepared.nominal_locator->outward_normal(m.face, m.u, m.v);
+  }
+  return raw[k] - (radii[k] - radii.smallest()) * normal;
+}
+
 // Fits made at most per face while peeling outliers off (each refit follows a change in the points left out).
 constexpr int kMaxOutlierFits = 4;
 // Whether leaving points out of a fit (or taking them back in) is worth a refit: a point of residual e among n
@@ -227,11 +248,6 @@ geometry::TipRadii tip_radii(const CompensateOptions& options, std::size_t point
   return geometry::TipRadii(options.probe_radii);
 }
 
-// Centres of tips larger than the smallest, moved in along `normal` (outward, machine frame) by the difference:
-// onto the smallest tip's centre surface, exactly when `normal` is the actual surface's.
-Point3 as_smallest_tip(const geometry::TipRadii& radii, std::size_t k, const Point3& centre, const Vector3& normal) {
-  return radii.uniform() ? centre : Point3(centre - (radii[k] - radii.smallest()) * normal);
-}
 
 // Why a face's fit stopped, in one line.
 std::string fit_stop_reason(const fitting::AdaptiveFitResult& fit, const fitting::AdaptiveFitOptions& options) {
@@ -451,18 +467,12 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     const nurbs::Surface start = fit_start(prepared.offset->model.faces[static_cast<std::size_t>(f)].surface, T);
     // The members' centres as the smallest tip's would be: a larger tip's moved in by the difference along the
     // registered nominal normal, and once there is a fit, along the fit's own (see the refits below).
-    const geometry::TipRadii& radii = prepared.radii;
     bool mixed = false;
     std::vector<Point3> member_points;
     member_points.reserve(members.size());
     for (std::size_t k : members) {
-      if (radii.uniform() || radii[k] == radii.smallest()) {
-        member_points.push_back(raw[k]);
-        continue;
-      }
-      mixed = true;
-      const registration::PointMatch& m = registration.matches[k];
-      member_points.push_back(as_smallest_tip(radii, k, raw[k], T.linear() * prepared.nominal_locator->outward_normal(f, m.u, m.v)));
+      mixed = mixed || prepared.radii[k] != prepared.radii.smallest();
+      member_points.push_back(as_smallest_tip(prepared, registration, raw, k));
     }
     // A point at an earlier point's position (a reading recorded twice: a scanner's repeated sample, a row copied)
     // is one observation: fitted once. Counted twice it would be its own nearest neighbour, so the noise estimate
@@ -523,11 +533,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
         const bool move_again = mixed && !moved_along_fit;
         if (move_again) {
           for (std::size_t j = 0; j < pts.size(); ++j) {
-            const std::size_t k = fitted_point[j];
-            const nurbs::UnitNormal n = nurbs::unit_normal(fit->surface, fit->params[j].u, fit->params[j].v);
-            if (n.status != nurbs::UnitNormal::Status::Degenerate) {
-              pts[j] = as_smallest_tip(radii, k, raw[k], static_cast<double>(face.outward) * n.n);
-            }
+            pts[j] = as_smallest_tip(prepared, registration, raw, fitted_point[j], &fit->surface, face.outward, fit->params[j]);
           }
           moved_along_fit = true;
         }
@@ -625,13 +631,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
     // The fit is of the smallest tip's centre surface: each member's centre moved onto it along the fit's normal.
     std::vector<Point3> pts(members.size());
     for (std::size_t i = 0; i < members.size(); ++i) {
-      const std::size_t k = members[i];
-      pts[i] = raw[k];
-      if (radii.uniform() || radii[k] == radii.smallest()) continue;
-      const nurbs::UnitNormal n = nurbs::unit_normal(ff.fit->surface, ff.params[i].u, ff.params[i].v);
-      if (n.status != nurbs::UnitNormal::Status::Degenerate) {
-        pts[i] = as_smallest_tip(radii, k, raw[k], static_cast<double>(face.outward) * n.n);
-      }
+      pts[i] = as_smallest_tip(prepared, registration, raw, members[i], &ff.fit->surface, face.outward, ff.params[i]);
     }
     const std::vector<ContactPoint> contacts =
         contact_points(ff.fit->surface, face.outward, radii.smallest(), pts, ff.params);
@@ -706,13 +706,13 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
 namespace {
 
 CompensationResult compensate_conventional(const cad::Model& model, std::span<const Point3> raw,
-                                           std::span<const Vector3> approach_normals, const CompensateOptions& options) {
+                                           std::span<const Vector3> approach_normals, const geometry::TipRadii& radii,
+                                           const CompensateOptions& options) {
   CompensationResult out;
   out.method = Method::Conventional;
   out.points.resize(raw.size());
   if (options.progress) options.progress("registration", 0.0);
   const geometry::Stopwatch clock;
-  const geometry::TipRadii radii = tip_radii(options, raw.size());
   const std::vector<Point3> contacts = conventional_contact_points(raw, approach_normals, radii);
   const cad::ModelLocator locator(model);
   check_points_near(locator, contacts, options.registration.initial, options.max_initial_distance_fraction);
@@ -763,7 +763,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
     if (options.progress) options.progress(name, fraction);
   };
   if (options.method == Method::Conventional) {
-    CompensationResult out = compensate_conventional(model, raw, *approach_normals, options);
+    CompensationResult out = compensate_conventional(model, raw, *approach_normals, radii, options);
     out.statistics = statistics(out.points);
     registration_warnings(out.registration, out.warnings);
     return out;
