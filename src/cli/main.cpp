@@ -177,7 +177,8 @@ constexpr const char* kProbeRadiusHelp =
     "without one of their own (a column r, DMIS SNSDEF/SNSLCT, QIF ProbeRadius); needed unless every point has one";
 
 constexpr const char* kUnitsHelp =
-    "Length unit of the point file, mm or inch (default: mm, or the DMIS file's UNITS statement, which must agree); "
+    "Length unit of the point file, mm or inch (default: the file's own, which must agree: a DMIS UNITS statement, "
+    "QIF FileUnits, a CSV '# lengths in UNIT' line; else mm); "
     "outputs for the points use it too, --json stays in mm";
 
 constexpr const char* kInitialTransformHelp =
@@ -273,11 +274,13 @@ int main(int argc, char** argv) {
   CLI::App* compensate = app.add_subcommand(
       "compensate",
       "Contact points and deviations from raw probe-centre points: every input row back, in order, with "
-      "x,y,z,nx,ny,nz,deviation,u,face,status and the input's other columns (u: the standard uncertainty of the point along its normal, k = 1, mm).");
+      "x,y,z,nx,ny,nz,deviation,u,face,status, r when the input gives tip radii, and the input's other columns (u: the standard "
+      "uncertainty of the point along its normal, k = 1, mm).");
   compensate->add_option("--cad", comp.cad, "CAD file (.igs, .iges, .stp, .step)")->required();
   compensate->add_option("--points", comp.points,
-                         "RAW.csv (header naming x,y,z, optional i,j,k; other columns carried), RAW.dmo (DMIS "
-                         "FA(label)=FEAT/POINT,CART,x,y,z,i,j,k) or RAW.qif (QIF 3.0 MeasuredPointSets)")
+                         "RAW.csv (header naming x,y,z, optional i,j,k and r; other columns carried), RAW.dmo (DMIS "
+                         "FA(label)=FEAT/POINT,CART,x,y,z,i,j,k, tips by SNSDEF/SNSLCT) or RAW.qif (QIF 3.0 "
+                         "MeasuredPointSets)")
       ->required();
   compensate->add_option("--probe-radius", comp.probe_radius, kProbeRadiusHelp);
   compensate->add_option("--units", comp.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
@@ -298,7 +301,7 @@ int main(int argc, char** argv) {
   CLI::App* fit = app.add_subcommand(
       "fit", "The as-measured part surfaces (fitted contact surfaces, machine frame) as NURBS in IGES or STEP.");
   fit->add_option("--cad", fit_args.cad, "CAD file")->required();
-  fit->add_option("--points", fit_args.points, "RAW.csv or RAW.dmo")->required();
+  fit->add_option("--points", fit_args.points, "RAW.csv, RAW.dmo or RAW.qif, as compensate's")->required();
   fit->add_option("--probe-radius", fit_args.probe_radius, kProbeRadiusHelp);
   fit->add_option("--units", fit_args.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
   fit->add_option("--initial-transform", fit_args.initial_transform, kInitialTransformHelp);
