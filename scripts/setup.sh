@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages probecomp builds against, only those that are missing.
+# Installs the Debian 12 packages probecomp builds against, only those that are missing; with --tests also what the
+# tests need beyond the build (a browser for the HTML report, Python for its checker).
 # Safe to run repeatedly: when everything is present it does nothing and needs no network.
 set -euo pipefail
 
@@ -18,6 +19,13 @@ packages=(
   libgtest-dev                  # GoogleTest
   libbenchmark-dev              # Google Benchmark
 )
+if [ "${1:-}" = "--tests" ]; then
+  packages+=(
+    python3                     # tests/io/check_report.py: the report's numbers against the JSON, its screenshot
+    chromium                    # renders the HTML report headless: no console error, the 3-D view not blank
+    fonts-dejavu-core           # a font for it to draw text with
+  )
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -4,7 +4,7 @@
 #   scripts/test.sh --sanitize    AddressSanitizer + UndefinedBehaviorSanitizer build in build-sanitize/
 set -euo pipefail
 cd "$(dirname "$0")/.."
-./scripts/setup.sh
+./scripts/setup.sh --tests
 
 build_dir=build
 flags=(-DCMAKE_BUILD_TYPE=Release)

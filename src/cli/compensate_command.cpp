@@ -8,11 +8,13 @@
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "probecomp/cad/model.hpp"
+#include "probecomp/compensation/conventional.hpp"
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/geometry/stopwatch.hpp"
 #include "probecomp/io/dmis.hpp"
 #include "probecomp/io/format.hpp"
 #include "probecomp/io/output_files.hpp"
+#include "probecomp/io/report.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/io/qif.hpp"
 #include "probecomp/io/results.hpp"
@@ -124,12 +126,21 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
   const std::string text = io::is_qif(a.output)                      ? io::compensated_qif(l.table, r, a.points)
                            : !a.output.empty() && io::is_dmis(a.output) ? io::compensated_dmis(l.table, r, a.points)
                                                                         : io::compensated_csv(l.table, r);
+  std::optional<io::Tolerance> tolerance;
+  if (!a.tolerance.empty()) tolerance = io::parse_tolerance(a.tolerance);
   io::OutputFiles files;
-  if (!a.report.empty()) files.add(a.report, io::html_report(a.cad, a.points, r));
   if (!a.output.empty()) files.add(a.output, text);
-  if (!a.json.empty()) {
-    files.add(a.json, io::statistics_json(r, l.inputs, {.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()}));
+  const io::FileTimings timings{.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()};
+  if (!a.report.empty()) {
+    io::ReportContext context{.inputs = l.inputs, .tolerance = tolerance, .timings = timings};
+    context.nominal = io::registered_outline(l.model, r.registration.transform);
+    if (l.table.normals) {
+      const geometry::TipRadii radii = l.radii.empty() ? geometry::TipRadii(l.inputs.tip_radii.front()) : geometry::TipRadii(l.radii);
+      context.conventional = compensation::conventional_contact_points(l.table.points, *l.table.normals, radii);
+    }
+    files.add(a.report, io::html_report(r, context));
   }
+  if (!a.json.empty()) files.add(a.json, io::statistics_json(r, l.inputs, timings, tolerance));
   files.commit();
   if (a.output.empty()) std::cout << text;
 }
@@ -145,6 +156,7 @@ void print_summary_row(std::ostream& out, const char* name, const studies::Error
 int run_compensate(const CompensateArgs& a) {
   io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}, {"--report", a.report}},
                                  {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform}});
+  if (!a.tolerance.empty()) (void)io::parse_tolerance(a.tolerance);  // a bad band fails before the run
   const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform);
   const compensation::Method method = a.method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
   const compensation::CompensationResult r = run_pipeline(l, method, a.accept_doubtful_registration, a.quiet);
@@ -228,10 +240,23 @@ int run_demo(const DemoArgs& a) {
   files.add(dir / "raw.csv", raw_points_csv(r.touches, r.plan, false));
   files.add(dir / "compensated_cad.csv", io::compensated_csv(table, r.cad));
   files.add(dir / "compensated_conventional.csv", io::compensated_csv(table, r.conventional));
+  // The report an inspector would read, against a ±0.05 mm band: the bump and the dent the simulation put into the
+  // part stand out of it.
+  io::ReportContext context{.inputs = {.cad = (dir / "nominal.igs").string(), .points = (dir / "raw.csv").string(),
+                                       .probe_radius = c.probe_radius, .tip_radii = {c.probe_radius}},
+                            .tolerance = io::Tolerance{-0.05, 0.05},
+                            .timings = {.total = seconds}};
+  context.nominal = io::registered_outline(c.nominal, r.cad.registration.transform);
+  std::vector<Point3> conventional;
+  for (const compensation::CompensatedPoint& p : r.conventional.points) conventional.push_back(p.contact);
+  context.conventional = std::move(conventional);
+  files.add(dir / "report.html", io::html_report(r.cad, context));
   files.commit();
-  t << "\nWrote " << (dir / "nominal.igs").string() << ", raw.csv, compensated_cad.csv and compensated_conventional.csv\n"
+  t << "\nWrote " << (dir / "nominal.igs").string()
+    << ", raw.csv, compensated_cad.csv, compensated_conventional.csv and report.html\n"
     << "in " << dir.string() << "; rerun with:\n  probecomp compensate --cad " << (dir / "nominal.igs").string()
-    << " --points " << (dir / "raw.csv").string() << " --probe-radius " << c.probe_radius << "\n"
+    << " --points " << (dir / "raw.csv").string() << " --probe-radius " << c.probe_radius
+    << " --report report.html --tolerance -0.05,0.05\n"
     << "Total " << fmt("%.2f", clock.seconds()) << " s (" << fmt("%.2f", seconds) << " s of it simulating and compensating).\n";
   std::cout << t.str();
   return 0;

@@ -294,7 +294,14 @@ int main(int argc, char** argv) {
   compensate->add_option("--json", comp.json,
                          "STATS.json: transform (4x4, CAD to machine), registration, per face fit, counts by status, deviation statistics, "
                          "timings in seconds");
-  compensate->add_option("--report", comp.report, "REPORT.html: a summary for people");
+  compensate->add_option("--report", comp.report,
+                         "REPORT.html: one self-contained page for people, opens offline: a 3-D colour map of the deviations "
+                         "(the worst labelled; colour by status or u), histograms (deviation; CAD-based minus "
+                         "conventional where the file has approach normals), a table per face, counts by status, the "
+                         "registration, the inputs, warnings, timings");
+  compensate->add_option("--tolerance", comp.tolerance,
+                         "LOWER,UPPER: the deviation tolerance band, mm (e.g. -0.05,0.05): out-of-tolerance counts per "
+                         "face and overall in --report and --json");
   compensate->add_flag("--quiet", comp.quiet, "No progress on standard error");
 
   cli::FitArgs fit_args;

@@ -1,7 +1,11 @@
 #include "probecomp/io/results.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 #include "probecomp/io/dmis.hpp"
@@ -12,21 +16,62 @@ namespace probecomp::io {
 
 namespace {
 
-std::string html_escaped(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
+// Trusted deviations summarised; the spread in two passes (micrometre deviations about a mean that may be
+// millimetres), as compensation::statistics does.
+DeviationSummary summary_of(const std::vector<double>& d, const std::optional<Tolerance>& tolerance) {
+  DeviationSummary s;
+  s.points = static_cast<int>(d.size());
+  if (d.empty()) return s;
+  double sum = 0.0;
+  s.min = std::numeric_limits<double>::infinity();
+  s.max = -s.min;
+  for (double x : d) {
+    sum += x;
+    s.min = std::min(s.min, x);
+    s.max = std::max(s.max, x);
+    if (tolerance && !tolerance->passes(x)) ++s.out_of_tolerance;
   }
-  return out;
+  s.mean = sum / static_cast<double>(d.size());
+  double sq = 0.0;
+  for (double x : d) sq += (x - s.mean) * (x - s.mean);
+  s.std = std::sqrt(sq / static_cast<double>(d.size()));
+  return s;
 }
 
 }  // namespace
+
+Tolerance parse_tolerance(const std::string& text) {
+  const auto comma = text.find(',');
+  std::optional<double> lower, upper;
+  if (comma != std::string::npos) {
+    lower = parse_number(trim(text.substr(0, comma)));
+    upper = parse_number(trim(text.substr(comma + 1)));
+  }
+  if (!lower || !upper || !std::isfinite(*lower) || !std::isfinite(*upper)) {
+    throw std::invalid_argument("--tolerance must be LOWER,UPPER in mm (e.g. -0.05,0.05), not '" + text + "'");
+  }
+  if (!(*lower < *upper)) {
+    throw std::invalid_argument("--tolerance: the lower limit must be below the upper, not '" + text + "'");
+  }
+  return {*lower, *upper};
+}
+
+DeviationSummaries summarise_deviations(const compensation::CompensationResult& r, const std::optional<Tolerance>& tolerance) {
+  std::map<int, std::vector<double>> by_face;
+  std::vector<double> all;
+  for (const compensation::CompensatedPoint& p : r.points) {
+    if (p.status != compensation::PointStatus::Ok) continue;
+    by_face[p.face].push_back(p.deviation);
+    all.push_back(p.deviation);
+  }
+  DeviationSummaries out;
+  for (const compensation::FaceReport& f : r.faces) {
+    const auto found = by_face.find(f.face);
+    out.faces.push_back(summary_of(found == by_face.end() ? std::vector<double>{} : found->second, tolerance));
+  }
+  out.all = summary_of(all, tolerance);
+  return out;
+}
 
 std::string compensated_csv(const PointTable& t, const compensation::CompensationResult& r) {
   // The tip radius of each row when the input gave any (the default filled in where a row's was empty).
@@ -89,7 +134,8 @@ std::string compensated_dmis(const PointTable& t, const compensation::Compensati
 }
 
 std::string statistics_json(const compensation::CompensationResult& r, const RunInputs& inputs,
-                            const FileTimings& files) {
+                            const FileTimings& files, const std::optional<Tolerance>& tolerance) {
+  const DeviationSummaries dev = summarise_deviations(r, tolerance);
   std::ostringstream j;
   const Eigen::Matrix4d M = r.registration.transform.matrix();
   j << "{\"method\": \"" << compensation::to_string(r.method) << "\", \"units\": \"mm\",\n \"inputs\": {\"cad\": "
@@ -143,6 +189,10 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
     for (std::size_t k = 0; k < std::size(compensation::kPointStatuses); ++k) {
       j << (k ? ", " : "") << "\"" << compensation::to_string(compensation::kPointStatuses[k]) << "\": " << x.counts[k];
     }
+    const DeviationSummary& d = dev.faces[f];
+    j << "}, \"deviation\": {\"points\": " << d.points << ", \"mean\": " << fmt("%.9g", d.mean) << ", \"std\": "
+      << fmt("%.9g", d.std) << ", \"min\": " << fmt("%.9g", d.min) << ", \"max\": " << fmt("%.9g", d.max);
+    if (tolerance) j << ", \"out_of_tolerance\": " << d.out_of_tolerance;
     j << "}, \"stop_reason\": " << json_string(x.stop_reason) << "}";
   }
   j << "],\n \"counts\": {";
@@ -152,7 +202,12 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
   }
   j << ", \"total\": " << st.total << "},\n \"deviation\": {\"points\": " << st.count(compensation::PointStatus::Ok)
     << ", \"mean\": " << fmt("%.9g", st.deviation_mean) << ", \"std\": " << fmt("%.9g", st.deviation_std)
-    << ", \"min\": " << fmt("%.9g", st.deviation_min) << ", \"max\": " << fmt("%.9g", st.deviation_max) << "}";
+    << ", \"min\": " << fmt("%.9g", st.deviation_min) << ", \"max\": " << fmt("%.9g", st.deviation_max);
+  if (tolerance) {
+    j << ", \"tolerance\": [" << fmt("%.9g", tolerance->lower) << ", " << fmt("%.9g", tolerance->upper)
+      << "], \"out_of_tolerance\": " << dev.all.out_of_tolerance;
+  }
+  j << "}";
   j << ",\n \"warnings\": [";
   for (std::size_t w = 0; w < r.warnings.size(); ++w) j << (w ? ", " : "") << json_string(r.warnings[w]);
   j << "]";
@@ -162,33 +217,6 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
     << ", \"compensate\": " << fmt("%.4f", t.compensation) << ", \"write\": " << fmt("%.4f", files.write)
     << ", \"total\": " << fmt("%.4f", files.total) << "}}\n";
   return j.str();
-}
-
-std::string html_report(const std::string& cad, const std::string& points, const compensation::CompensationResult& r) {
-  std::vector<double> d;
-  for (const auto& p : r.points) {
-    if (p.status == compensation::PointStatus::Ok) d.push_back(p.deviation);
-  }
-  std::sort(d.begin(), d.end());
-  auto quantile = [&](double q) { return d.empty() ? 0.0 : d[static_cast<std::size_t>(q * (d.size() - 1))]; };
-  std::ostringstream h;
-  h << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>probecomp report</title></head><body>\n"
-    << "<h1>probecomp: " << compensation::to_string(r.method) << " compensation</h1>\n<p>CAD: " << html_escaped(cad)
-    << "<br>points: " << html_escaped(points) << " (" << r.points.size() << ")</p>\n"
-    << "<h2>Registration</h2><p>" << registration::to_string(r.registration.status) << ": "
-    << html_escaped(r.registration.stop_reason) << "; RMS " << fmt("%.6f", r.registration.rms) << " mm</p>\n"
-    << "<h2>Deviation of trusted points from the registered nominal (mm)</h2><table border=1>"
-    << "<tr><th>min</th><th>5 %</th><th>median</th><th>95 %</th><th>max</th></tr><tr>";
-  for (double q : {0.0, 0.05, 0.5, 0.95, 1.0}) h << "<td>" << fmt("%.6f", quantile(q)) << "</td>";
-  h << "</tr></table>\n<h2>Faces</h2><table border=1><tr><th>face</th><th>points</th><th>fitted</th><th>control "
-       "points</th><th>rounds</th><th>RMS residual (mm)</th><th>noise (mm)</th><th>outliers</th></tr>\n";
-  for (const auto& f : r.faces) {
-    h << "<tr><td>" << f.face << "</td><td>" << f.points << "</td><td>" << (f.fitted ? "yes" : "no") << "</td><td>"
-      << f.control_points << "</td><td>" << f.rounds << "</td><td>" << fmt("%.6f", f.rms) << "</td><td>"
-      << fmt("%.6f", f.noise_sigma) << "</td><td>" << f.count(compensation::PointStatus::Outlier) << "</td></tr>\n";
-  }
-  h << "</table></body></html>\n";
-  return h.str();
 }
 
 }  // namespace probecomp::io

@@ -3,6 +3,7 @@
 // statistics as JSON; a summary page in HTML. Lengths with 9 decimals (nm), unit vectors with 12.
 
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -38,14 +39,38 @@ struct RunInputs {
   std::vector<double> tip_radii{};
 };
 
+// A deviation passes when lower ≤ deviation ≤ upper (mm).
+struct Tolerance {
+  double lower = 0.0, upper = 0.0;
+  [[nodiscard]] bool passes(double deviation) const { return deviation >= lower && deviation <= upper; }
+};
+
+// "LOWER,UPPER" (mm, lower < upper), or std::invalid_argument saying why not.
+[[nodiscard]] Tolerance parse_tolerance(const std::string& text);
+
+// The deviations of trusted (ok) points: count, mean, std (population), min, max (mm), and with a tolerance how
+// many fall outside it.
+struct DeviationSummary {
+  int points = 0;
+  double mean = 0.0, std = 0.0, min = 0.0, max = 0.0;
+  int out_of_tolerance = 0;
+};
+
+// Per face of result.faces, in that order (its points: those whose `face` is the face's index), and overall.
+struct DeviationSummaries {
+  std::vector<DeviationSummary> faces;
+  DeviationSummary all;
+};
+[[nodiscard]] DeviationSummaries summarise_deviations(const compensation::CompensationResult& result,
+                                                      const std::optional<Tolerance>& tolerance);
+
 // The inputs, the transform (CAD to machine), the registration (converged: bool; status; stop_reason), each face's
 // fit, counts by status, the deviation statistics of the trusted points, the warnings and the timings in seconds
 // (read, prepare, register, fit, compensate, write, total). Lengths in mm, whatever the points' unit.
+// With a tolerance: it, and each face's and the whole run's count of trusted points outside it; each face's trusted
+// deviations (mean, std, min, max) in any case.
 [[nodiscard]] std::string statistics_json(const compensation::CompensationResult& result, const RunInputs& inputs,
-                                          const FileTimings& timings);
-
-// A summary page for people: registration, deviation quantiles of the trusted points, a table of the faces.
-[[nodiscard]] std::string html_report(const std::string& cad_file, const std::string& points_file,
-                                      const compensation::CompensationResult& result);
+                                          const FileTimings& timings,
+                                          const std::optional<Tolerance>& tolerance = std::nullopt);
 
 }  // namespace probecomp::io
