@@ -105,24 +105,32 @@ std::string view_json(const compensation::CompensationResult& r, const ReportCon
   for (std::size_t k = 0; k < n; ++k) {
     if (finite(pts[k].contact)) drawable.push_back(k);
   }
-  // The worst trusted points: largest |deviation|, the earlier row first among equals (deterministic).
+  // The points labelled: the trusted ones of largest |deviation| (the earlier row first among equals), each at least
+  // a fifteenth of the points' extent from those labelled before it, so that one dent does not take every label.
   std::vector<std::size_t> ok;
+  BoundingBox extent;
   for (std::size_t k : drawable) {
+    extent.extend(pts[k].contact);
     if (pts[k].status == PointStatus::Ok && std::isfinite(pts[k].deviation)) ok.push_back(k);
   }
-  const auto worst_count = std::min(ok.size(), static_cast<std::size_t>(std::max(c.labelled_worst, 0)));
-  std::partial_sort(ok.begin(), ok.begin() + static_cast<std::ptrdiff_t>(worst_count), ok.end(),
-                    [&](std::size_t a, std::size_t b) {
-                      const double da = std::abs(pts[a].deviation), db = std::abs(pts[b].deviation);
-                      return da != db ? da > db : a < b;
-                    });
-  std::vector<std::size_t> worst(ok.begin(), ok.begin() + static_cast<std::ptrdiff_t>(worst_count));
+  std::sort(ok.begin(), ok.end(), [&](std::size_t a, std::size_t b) {
+    const double da = std::abs(pts[a].deviation), db = std::abs(pts[b].deviation);
+    return da != db ? da > db : a < b;
+  });
+  const double apart = drawable.empty() ? 0.0 : (extent.max - extent.min).norm() / 15.0;
+  std::vector<std::size_t> worst;
+  for (std::size_t k : ok) {
+    if (worst.size() >= static_cast<std::size_t>(std::max(c.labelled_worst, 0))) break;
+    const bool far = std::all_of(worst.begin(), worst.end(),
+                                 [&](std::size_t w) { return (pts[w].contact - pts[k].contact).norm() >= apart; });
+    if (far) worst.push_back(k);
+  }
   // The colour bar: the tolerance band, else ±(99th percentile of the trusted |deviation|) so that one stray point
   // does not wash the map out; beyond it the map's darkest ends.
   std::pair<double, double> range{-1.0, 1.0};
   if (c.tolerance) {
     range = {1000.0 * c.tolerance->lower, 1000.0 * c.tolerance->upper};
-    caption = "colour bar: the tolerance band";
+    caption = "Colour bar: the tolerance band";
   } else {
     std::vector<double> a;
     for (std::size_t k : ok) a.push_back(1000.0 * std::abs(pts[k].deviation));
@@ -133,7 +141,7 @@ std::string view_json(const compensation::CompensationResult& r, const ReportCon
       q = std::max(a[at], 0.1);
     }
     range = {-q, q};
-    caption = "colour bar: &plusmn;" + fmt("%.2f", q) + " &micro;m, 99 % of the trusted points' |deviation|";
+    caption = "Colour bar: &plusmn;" + fmt("%.2f", q) + " &micro;m, 99 % of the trusted points' |deviation|";
   }
   // Every k-th drawable row, and the labelled ones.
   const std::size_t cap = std::max<std::size_t>(c.max_view_points, 1);
@@ -264,7 +272,7 @@ std::string html_report(const compensation::CompensationResult& r, const ReportC
        "body{font-family:sans-serif;margin:1.5em;color:#222;max-width:1400px}"
        "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #bbb;padding:2px 8px;text-align:right}"
        "th{background:#eee}td.l,th.l{text-align:left}.fail{color:#c62828;font-weight:bold}.warn{color:#8a5a00}"
-       "#view{border:1px solid #ccc;cursor:grab;display:block}#view-box{width:100%}.note{color:#555;font-size:90%}"
+       "#view{border:1px solid #ccc;cursor:grab;display:block;touch-action:none}#view-box{width:100%}.note{color:#555;font-size:90%}"
        "</style></head><body>\n";
   h << "<h1>probecomp: " << compensation::to_string(r.method) << " compensation</h1>\n";
   // The inputs.
@@ -289,7 +297,8 @@ std::string html_report(const compensation::CompensationResult& r, const ReportC
   });
   h << "<h2>Deviation map</h2>\n<p class=\"note\">Deviation of each compensated point from the registered nominal "
        "(+ outside the material), the nominal faces faint; the "
-    << c.labelled_worst << " trusted points of largest |deviation| labelled. " << caption
+    << "largest |deviation| of the trusted points labelled, at up to " << c.labelled_worst
+    << " places apart. " << caption
     << ". Drag to turn, shift-drag to move, wheel to zoom, double-click to reset.</p>\n"
        "<p>Colour by <label><input type=\"radio\" name=\"colour\" value=\"deviation\" checked> deviation</label> "
        "<label><input type=\"radio\" name=\"colour\" value=\"status\"> status</label> "

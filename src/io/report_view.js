@@ -193,13 +193,32 @@
     draw();
   }
 
+  // Redraws asked for by interaction, one for a burst of events (100 000 points take tens of milliseconds to draw):
+  // a timer, not an animation frame, so that a page in the background or a headless browser redraws as well.
+  let pending = false;
+  function redraw() {
+    if (pending) return;
+    pending = true;
+    setTimeout(() => {
+      pending = false;
+      draw();
+    }, 0);
+  }
+
+  // Pointer events: a mouse, a pen or a finger on a shop-floor tablet alike.
   let drag = null;
   canvas.addEventListener("contextmenu", (e) => e.preventDefault());
-  canvas.addEventListener("mousedown", (e) => {
+  canvas.addEventListener("pointerdown", (e) => {
     drag = { x: e.clientX, y: e.clientY, pan: e.shiftKey || e.button === 2 };
+    try {
+      canvas.setPointerCapture(e.pointerId);  // keeps the drag when the pointer leaves the canvas
+    } catch (err) {
+      // a pointer that is already gone: the drag still works while it stays on the canvas
+    }
   });
-  window.addEventListener("mouseup", () => { drag = null; });
-  window.addEventListener("mousemove", (e) => {
+  canvas.addEventListener("pointerup", () => { drag = null; });
+  canvas.addEventListener("pointercancel", () => { drag = null; });
+  canvas.addEventListener("pointermove", (e) => {
     if (!drag) return;
     const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
     drag.x = e.clientX;
@@ -211,18 +230,18 @@
       view.yaw += dx * 0.01;
       view.pitch = Math.max(-Math.PI / 2, Math.min(Math.PI / 2, view.pitch + dy * 0.01));
     }
-    draw();
+    redraw();
   });
   canvas.addEventListener("wheel", (e) => {
     e.preventDefault();
     view.zoom *= Math.exp(-e.deltaY * 0.001);
-    draw();
+    redraw();
   }, { passive: false });
   canvas.addEventListener("dblclick", () => {
     view = Object.assign({}, home);
     draw();
   });
-  canvas.addEventListener("mousemove", (e) => {
+  canvas.addEventListener("pointermove", (e) => {
     if (drag) return;
     const box = canvas.getBoundingClientRect();
     const x = (e.clientX - box.left) * canvas.width / box.width, y = (e.clientY - box.top) * canvas.height / box.height;

@@ -51,6 +51,7 @@ sabotaged "loads an image" 's|<body>|<body><img alt="" src="https://example.com/
 sabotaged "loads a style sheet" 's|</head>|<link rel="stylesheet" href="style.css"></head>|'
 sabotaged "throws an error" 's|</body>|<script>no_such_function();</script></body>|'
 sabotaged "draws nothing" 's|  function draw() {|  function draw() { return;|'
+sabotaged "does not zoom" 's|view.zoom \*= Math.exp(-e.deltaY \* 0.001);|view.zoom *= 1;|'
 sed 's|"ok": \([0-9]*\),|"ok": 1\1,|' "$W/demo.json" >"$W/bad.json"
 sabotaged "disagrees with its JSON" 's|x|x|' "$W/bad.json"
 

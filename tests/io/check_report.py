@@ -11,8 +11,8 @@
    out of tolerance), each face's row, the registration's transform.
 3. With --chromium: rendered by headless Chromium, offline (every host unresolvable, no proxy reachable), with no
    console message at all (the page logs nothing, so any message is an error or a failed load); the 3-D view has
-   drawn every point it holds (the page marks <body data-drawn-points>); a screenshot of the view is not blank: a
-   fair share of its pixels are coloured, both blue and red among them.
+   drawn every point it holds (the page marks <body data-drawn-points>); a drag turns it, the wheel zooms it and
+   colouring by status recolours it (each changes the canvas); a screenshot of the view is not blank.
 Prints what it checked; exits 1 on the first failure.
 """
 import html.parser
@@ -212,6 +212,41 @@ def check_in_chromium(report, page):
     if not drawn or int(drawn.group(1)) != held:
         fail("the 3-D view did not draw its %d points (body says %s)" % (held, drawn.group(1) if drawn else "nothing"))
     ok("rendered in headless Chromium offline with no console message; the 3-D view drew its %d points" % held)
+
+    # Interaction: a copy of the report with a script that drags, wheels and switches the colouring, each of which
+    # must change the picture, and hovering a labelled point names its row.
+    probe = """<script>
+window.addEventListener("load", () => {
+  const c = document.getElementById("view"), seen = [c.toDataURL()], marks = document.body.dataset;
+  const at = (x, y) => ({clientX: c.getBoundingClientRect().left + x, clientY: c.getBoundingClientRect().top + y,
+                         pointerId: 1, bubbles: true, button: 0});
+  const frames = (n, then) => setTimeout(then, 50 * n);
+  const changed = () => { const now = c.toDataURL(), was = seen[seen.length - 1]; seen.push(now); return String(now !== was); };
+  c.dispatchEvent(new PointerEvent("pointerdown", at(200, 200)));
+  c.dispatchEvent(new PointerEvent("pointermove", at(260, 230)));
+  c.dispatchEvent(new PointerEvent("pointerup", at(260, 230)));
+  frames(2, () => {
+    marks.turned = changed();
+    c.dispatchEvent(new WheelEvent("wheel", {deltaY: -400, bubbles: true, cancelable: true}));
+    frames(2, () => {
+      marks.zoomed = changed();
+      document.querySelector("input[name=colour][value=status]").click();
+      marks.statusColours = changed();
+      marks.probed = "yes";
+    });
+  });
+});
+</script></body>"""
+    copy = os.path.join(work, "interaction.html")
+    with open(copy, "w", encoding="utf-8") as out:
+        out.write(open(report, encoding="utf-8").read().replace("</body>", probe, 1))
+    run, console = chromium(["--virtual-time-budget=5000", "--dump-dom", "file://" + copy], work)
+    if console:
+        fail("the browser's console while turning, zooming and recolouring: " + " | ".join(console[:5]))
+    marks = dict(re.findall(r'data-(turned|zoomed|status-colours|probed)="([a-z]+)"', run.stdout))
+    if marks != {"turned": "true", "zoomed": "true", "status-colours": "true", "probed": "yes"}:
+        fail("the 3-D view did not answer a drag, a wheel turn and colouring by status: %s" % marks)
+    ok("the 3-D view turns on a drag, zooms on the wheel and recolours by status")
 
     shot = os.path.join(work, "view.png")
     run, console = chromium(["--window-size=1000,1300", "--screenshot=" + shot, url], work)
