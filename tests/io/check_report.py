@@ -213,6 +213,40 @@ def check_in_chromium(report, page):
         fail("the 3-D view did not draw its %d points (body says %s)" % (held, drawn.group(1) if drawn else "nothing"))
     ok("rendered in headless Chromium offline with no console message; the 3-D view drew its %d points" % held)
 
+    shot = os.path.join(work, "view.png")
+    run, console = chromium(["--window-size=1000,1300", "--screenshot=" + shot, url], work)
+    if run.returncode != 0 or not os.path.exists(shot):
+        fail("chromium --screenshot failed: %s" % run.stderr[-500:])
+    if console:
+        fail("the browser's console: " + " | ".join(console[:5]))
+    width, height, bpp, rows = png_pixels(shot)
+    # The view's canvas: the box drawn by its 1-pixel #ccc border (the longest runs of that grey).
+    border = (204, 204, 204)
+    def is_border(line, x):
+        return tuple(line[x * bpp:x * bpp + 3]) == border
+    edges = [y for y in range(height) if sum(is_border(rows[y], x) for x in range(0, width, 4)) > width // 8]
+    if len(edges) < 2:
+        fail("the screenshot shows no view (no canvas border found)")
+    top, bottom = edges[0], edges[-1]
+    xs = [x for x in range(width) if is_border(rows[top], x)]
+    left, right = xs[0], xs[-1] - 130  # the colour bar's column at the right is not the map
+    drawn = coloured = red = blue = 0
+    for y in range(top + 2, bottom - 1):
+        line = rows[y]
+        for x in range(left + 2, right):
+            r, g, b = line[x * bpp], line[x * bpp + 1], line[x * bpp + 2]
+            if min(r, g, b) < 250:
+                drawn += 1
+            if max(r, g, b) - min(r, g, b) > 60:
+                coloured += 1
+                red += r > b + 60
+                blue += b > r + 60
+    area = float((bottom - top - 3) * (right - left - 2))
+    if drawn < 0.01 * area or coloured < 200:
+        fail("the view in the screenshot looks blank: %.2f %% of it drawn, %d coloured pixels" % (100 * drawn / area, coloured))
+    ok("screenshot: the view (%dx%d pixels) is %.1f %% drawn, %d coloured pixels (%d red, %d blue)"
+       % (right - left, bottom - top, 100 * drawn / area, coloured, red, blue))
+
     # Interaction: a copy of the report with a script that drags, wheels and switches the colouring, each of which
     # must change the picture, and hovering a labelled point names its row.
     probe = """<script>
@@ -247,40 +281,6 @@ window.addEventListener("load", () => {
     if marks != {"turned": "true", "zoomed": "true", "status-colours": "true", "probed": "yes"}:
         fail("the 3-D view did not answer a drag, a wheel turn and colouring by status: %s" % marks)
     ok("the 3-D view turns on a drag, zooms on the wheel and recolours by status")
-
-    shot = os.path.join(work, "view.png")
-    run, console = chromium(["--window-size=1000,1300", "--screenshot=" + shot, url], work)
-    if run.returncode != 0 or not os.path.exists(shot):
-        fail("chromium --screenshot failed: %s" % run.stderr[-500:])
-    if console:
-        fail("the browser's console: " + " | ".join(console[:5]))
-    width, height, bpp, rows = png_pixels(shot)
-    # The view's canvas: the box drawn by its 1-pixel #ccc border (the longest runs of that grey).
-    border = (204, 204, 204)
-    def is_border(line, x):
-        return tuple(line[x * bpp:x * bpp + 3]) == border
-    edges = [y for y in range(height) if sum(is_border(rows[y], x) for x in range(0, width, 4)) > width // 8]
-    if len(edges) < 2:
-        fail("the screenshot shows no view (no canvas border found)")
-    top, bottom = edges[0], edges[-1]
-    xs = [x for x in range(width) if is_border(rows[top], x)]
-    left, right = xs[0], xs[-1] - 130  # the colour bar's column at the right is not the map
-    drawn = coloured = red = blue = 0
-    for y in range(top + 2, bottom - 1):
-        line = rows[y]
-        for x in range(left + 2, right):
-            r, g, b = line[x * bpp], line[x * bpp + 1], line[x * bpp + 2]
-            if min(r, g, b) < 250:
-                drawn += 1
-            if max(r, g, b) - min(r, g, b) > 60:
-                coloured += 1
-                red += r > b + 60
-                blue += b > r + 60
-    area = float((bottom - top - 3) * (right - left - 2))
-    if drawn < 0.01 * area or coloured < 200:
-        fail("the view in the screenshot looks blank: %.2f %% of it drawn, %d coloured pixels" % (100 * drawn / area, coloured))
-    ok("screenshot: the view (%dx%d pixels) is %.1f %% drawn, %d coloured pixels (%d red, %d blue)"
-       % (right - left, bottom - top, 100 * drawn / area, coloured, red, blue))
 
 
 def main():
