@@ -224,7 +224,8 @@ int main(int argc, char** argv) {
 
   cli::StudyArgs study_args;
   CLI::App* study = app.add_subcommand(
-      "study", "Reproduce a study of the paper (DESIGN.md section 3); prints a table and writes DIR/NAME.json and DIR/NAME.csv.");
+      "study", "Reproduce a study of the paper (DESIGN.md section 3); prints a table and writes DIR/NAME.json, DIR/NAME.csv, "
+               "its figures DIR/NAME*.svg and DIR/index.html (every study run into DIR on one self-contained page).");
   study->add_option("name", study_args.name,
                     "analytic-cylinder: conventional error on a misaligned circle, exact (Figs 3 and 5)\n"
                     "registration: the registration Monte Carlo of Table 1 (cube corner, 900 points, 30 misalignments)\n"
@@ -234,7 +235,8 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::IsMember(cli::kStudyNames));
   study->add_option("--output-dir", study_args.output_dir,
-                    "Directory for NAME.json (summary) and NAME.csv (series); default probecomp-study");
+                    "Directory for NAME.json (summary), NAME.csv (series), NAME*.svg (figures), NAME.section.html "
+                    "and index.html; default probecomp-study");
   study->add_option("--noise", study_args.noise,
                     "registration, freeform: Gaussian noise sigma on each coordinate of the raw centres, mm "
                     "(default: 0 and 0.0045); freeform: a comma-separated list sweeps the levels, e.g. 0,0.0015,0.0045")

@@ -1,6 +1,7 @@
 #!/bin/sh
 # probecomp study analytic-cylinder, cylinder-misalignment and freeform: each prints its table and writes
-# NAME.csv and NAME.json with the promised content. Usage: studies.sh PROBECOMP WORK_DIR
+# NAME.csv and NAME.json with the promised content, its figures (NAME*.svg) and NAME.section.html; index.html in the
+# same directory gathers the sections of all of them, self-contained. Usage: studies.sh PROBECOMP WORK_DIR
 set -u
 P=$1; W=$2
 rm -rf "$W"; mkdir -p "$W"
@@ -33,5 +34,71 @@ grep -q 'true error is within +-2u' "$W/f.txt" || { echo "FAIL: no coverage line
 awk -F, 'NR == 2 { if ($6 > 0.002 || $7 != 0 || $10 < 0.85) { print "FAIL: sigma 0: " $0; exit 1 } }
          NR == 3 { if ($4 > 0.0013 || $6 > 0.009 || $7 != 0 || $9 < 0.90 || $9 > 0.99 || $10 < 0.85) { print "FAIL: sigma 4.5 um: " $0; exit 1 } }' \
   "$W/freeform-noise.csv" || { cat "$W/fn.txt"; fail=1; }
-[ $fail -eq 0 ] && echo "studies: analytic-cylinder, cylinder-misalignment and freeform tables (and the noise sweep), CSV and JSON as promised"
+# The figures: each study's SVG files and section, and index.html, one self-contained page of the four sections run
+# into $W, in the order of the paper (kStudyNames, the sweep after freeform), with every figure inline.
+I="$W/index.html"
+for f in analytic-cylinder-fig3.svg analytic-cylinder-fig5.svg cylinder-misalignment.svg freeform.svg freeform-noise.svg; do
+  [ "$(grep -c '<svg' "$W/$f")" -eq 1 ] && grep -q '^<svg xmlns="http://www.w3.org/2000/svg" width="[0-9]*" height="[0-9]*"' "$W/$f" ||
+    { echo "FAIL: $f is not one SVG"; fail=1; }
+  grep -F -q "$(head -1 "$W/$f")" "$I" 2>/dev/null || { echo "FAIL: $f not inlined in index.html"; fail=1; }
+done
+for n in analytic-cylinder cylinder-misalignment freeform freeform-noise; do
+  [ -f "$W/$n.section.html" ] || { echo "FAIL: no $n.section.html"; fail=1; }
+done
+check_index() {  # $1: what was run last
+  [ -f "$I" ] || { echo "FAIL: no index.html after $1"; return 1; }
+  svgs=$(grep -o '<svg' "$I" | wc -l)
+  [ "$svgs" -eq 5 ] || { echo "FAIL: $svgs inline SVGs in index.html after $1, expected 5 (Figs 3, 5, 8, Table 2, sweep)"; return 1; }
+  order=$(grep -o '<section id="[a-z-]*"' "$I" | sed 's/.*id="//; s/"//' | tr '\n' ' ')
+  [ "$order" = "analytic-cylinder cylinder-misalignment freeform freeform-noise " ] ||
+    { echo "FAIL: sections after $1: $order"; return 1; }
+  # Nothing fetched: no link, script, image, frame, CSS import or url(); no address but the SVG namespace.
+  if grep -n -i -E 'src=|href|url\(|@import|<script|<link|<img|<iframe|<object|<embed' "$I"; then
+    echo "FAIL: index.html references something outside itself"; return 1
+  fi
+  if grep -o -i -E '(https?|ftp|file)://[^" <]*' "$I" | grep -v -x 'http://www.w3.org/2000/svg'; then
+    echo "FAIL: index.html names an address other than the SVG namespace"; return 1
+  fi
+  # The numbers in the tables are the JSON's and the printed tables': the paper's example's largest error, the
+  # free-form CAD-based std and min, the misalignment study's conventional std at 40 um.
+  v=$(sed -n 's/.*"max_error_mm": \([-0-9.]*\),.*/\1/p' "$W/analytic-cylinder.json" | head -1)
+  grep -q "<td>$v</td>" "$I" || { echo "FAIL: max_error_mm $v not in index.html"; return 1; }
+  for key in std min; do
+    v=$(sed -n "s/.*\"cad\": {\"points\": [0-9]*,.*\"$key\": \([-0-9.]*\),.*/\1/p" "$W/freeform.json" | head -1)
+    [ -n "$v" ] && grep -q "<td>$v</td>" "$I" || { echo "FAIL: freeform CAD $key '$v' not in index.html"; return 1; }
+  done
+  v=$(awk -F'|' '$1 ~ /^ +40 $/ { split($2, a, " "); print a[2] }' "$W/m.txt")
+  [ -n "$v" ] && grep -q "<td>40</td><td>[-0-9.]*</td><td>$v</td>" "$I" ||
+    { echo "FAIL: conventional std at 40 um '$v' not in index.html's Fig. 8 table"; return 1; }
+  # Well-formed: each inline SVG parses as XML, and the page's elements nest.
+  if command -v python3 >/dev/null 2>&1; then
+    python3 - "$I" <<'PY' || return 1
+import re, sys, xml.etree.ElementTree as ET
+from html.parser import HTMLParser
+page = open(sys.argv[1], encoding="utf-8").read()
+for svg in re.findall(r"<svg.*?</svg>", page, re.S):
+    root = ET.fromstring(svg)
+    assert root.tag == "{http://www.w3.org/2000/svg}svg", root.tag
+    assert root.find("{http://www.w3.org/2000/svg}title") is not None, "an SVG without a title"
+class Nesting(HTMLParser):
+    void = {"meta", "br", "img", "hr", "input", "link"}
+    def __init__(self):
+        super().__init__(); self.stack = []
+    def handle_starttag(self, tag, attrs):
+        if tag not in self.void: self.stack.append(tag)
+    def handle_startendtag(self, tag, attrs):
+        pass
+    def handle_endtag(self, tag):
+        if not self.stack or self.stack.pop() != tag: raise SystemExit(f"FAIL: </{tag}> closes nothing open")
+n = Nesting(); n.feed(page); n.close()
+if n.stack: raise SystemExit(f"FAIL: unclosed {n.stack}")
+PY
+  fi
+}
+check_index "the noise sweep" || fail=1
+# Running a study again replaces its section (and figures) rather than adding one.
+"$P" study analytic-cylinder --output-dir "$W" >"$W/a2.txt" || { echo "FAIL: analytic-cylinder again"; exit 1; }
+check_index "analytic-cylinder again" || fail=1
+
+[ $fail -eq 0 ] && echo "studies: analytic-cylinder, cylinder-misalignment and freeform tables (and the noise sweep), CSV, JSON, SVG figures and index.html as promised"
 exit $fail
