@@ -168,7 +168,7 @@ double legend_width(const std::vector<Series>& series) {
     named = true;
     longest = std::max(longest, code_points(s.name));
   }
-  return named ? 44 + 7 * static_cast<double>(longest) : 0;
+  return named ? 44 + 8 * static_cast<double>(longest) : 0;
 }
 
 std::vector<double> nice_ticks(double lo, double hi, int target) {

@@ -71,15 +71,15 @@ TEST(Charts, TickLabelsHaveTheDecimalsTheStepNeeds) {
 }
 
 TEST(Charts, MarkersLandWhereTheAxisMappingPutsThem) {
-  // Legend: one name of 1 character → 44 + 7 = 51 px. Plot area: x 72 … 640 − 16 − 51 = 573, y 40 … 400 − 52 = 348.
+  // Legend: one name of 1 character → 44 + 8 = 52 px. Plot area: x 72 … 640 − 16 − 52 = 572, y 40 … 400 − 52 = 348.
   // Axes: x ticks 0 … 10 (step 2), y ticks 0 … 1 (step 0.2).
   const std::string svg = line_chart_svg({{.name = "s", .x = {0, 5, 10}, .y = {0, 0.5, 1}}},
                                          {.title = "t", .x_label = "x", .y_label = "y"});
-  EXPECT_DOUBLE_EQ(legend_width({{.name = "s"}}), 51);
+  EXPECT_DOUBLE_EQ(legend_width({{.name = "s"}}), 52);
   EXPECT_NE(svg.find("<circle cx=\"72.00\" cy=\"348.00\" r=\"3\""), std::string::npos) << svg;
-  EXPECT_NE(svg.find("<circle cx=\"322.50\" cy=\"194.00\" r=\"3\""), std::string::npos) << svg;  // 72 + 501/2, 348 − 308/2
-  EXPECT_NE(svg.find("<circle cx=\"573.00\" cy=\"40.00\" r=\"3\""), std::string::npos) << svg;
-  EXPECT_NE(svg.find("points=\"72.00,348.00 322.50,194.00 573.00,40.00\""), std::string::npos) << svg;
+  EXPECT_NE(svg.find("<circle cx=\"322.00\" cy=\"194.00\" r=\"3\""), std::string::npos) << svg;  // 72 + 500/2, 348 − 308/2
+  EXPECT_NE(svg.find("<circle cx=\"572.00\" cy=\"40.00\" r=\"3\""), std::string::npos) << svg;
+  EXPECT_NE(svg.find("points=\"72.00,348.00 322.00,194.00 572.00,40.00\""), std::string::npos) << svg;
   EXPECT_NE(svg.find("<title>s: x = 5, y = 0.5</title>"), std::string::npos) << svg;  // hover text
   EXPECT_NE(svg.find(">0.6</text>"), std::string::npos);                                // y tick label
   EXPECT_NE(svg.find(">10</text>"), std::string::npos);                                 // x tick label
@@ -88,7 +88,7 @@ TEST(Charts, MarkersLandWhereTheAxisMappingPutsThem) {
 
   // Given x ticks are the x range: x = 5 on 0 … 20 is a quarter of the way.
   const std::string given = line_chart_svg({{.name = "s", .x = {5}, .y = {0.5}}}, {.x_ticks = {0, 10, 20}});
-  EXPECT_NE(given.find("<circle cx=\"197.25\""), std::string::npos) << given;  // 72 + 501/4
+  EXPECT_NE(given.find("<circle cx=\"197.00\""), std::string::npos) << given;  // 72 + 500/4
 }
 
 TEST(Charts, NaNBreaksTheLine) {
@@ -133,19 +133,19 @@ TEST(Charts, TextIsEscaped) {
   EXPECT_NE(svg.find("θ (°)"), std::string::npos);
   EXPECT_EQ(count(svg, "a<b"), 0u);
   // Legend width counts characters, not bytes: "θ" is 2 bytes, one character.
-  EXPECT_DOUBLE_EQ(legend_width({{.name = "θθ"}}), 44 + 14);
+  EXPECT_DOUBLE_EQ(legend_width({{.name = "θθ"}}), 44 + 16);
   expect_self_contained(svg);
 }
 
 TEST(Charts, BarsStandOnZeroAtTheMappedHeight) {
-  // Legend 51 px (names of 1 character): plot x 72 … 573, y 40 … 348; y ticks 0 … 3; groups 250.5 px wide, bars
-  // 0.8 · 250.5 / 2 = 100.2 px, starting 0.1 of a group in.
+  // Legend 52 px (names of 1 character): plot x 72 … 572, y 40 … 348; y ticks 0 … 3; groups 250 px wide, bars
+  // 0.8 · 250 / 2 = 100 px, starting 0.1 of a group in.
   const std::string svg = grouped_bar_chart_svg({"rx", "tx"}, {{.name = "a", .y = {1, 2}}, {.name = "b", .y = {3, kNaN}}},
                                                 {.title = "bars"});
-  EXPECT_NE(svg.find("<rect x=\"97.05\" y=\"245.33\" width=\"100.20\" height=\"102.67\"><title>a, rx: 1</title>"),
+  EXPECT_NE(svg.find("<rect x=\"97.00\" y=\"245.33\" width=\"100.00\" height=\"102.67\"><title>a, rx: 1</title>"),
             std::string::npos)
       << svg;
-  EXPECT_NE(svg.find("<rect x=\"197.25\" y=\"40.00\" width=\"100.20\" height=\"308.00\"><title>b, rx: 3</title>"),
+  EXPECT_NE(svg.find("<rect x=\"197.00\" y=\"40.00\" width=\"100.00\" height=\"308.00\"><title>b, rx: 3</title>"),
             std::string::npos)
       << svg;
   EXPECT_EQ(count(svg, "<title>b, tx"), 0u);  // NaN: no bar

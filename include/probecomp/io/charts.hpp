@@ -33,7 +33,7 @@ struct ChartOptions {
 
 // The layout, in pixels from the top left corner (for tests and captions):
 //   plot area x from kChartLeft to width − kChartRight − legend width, y from kChartTop to height − kChartBottom;
-//   legend width = 0 without named series, else 44 + 7 × the longest name's length in characters (UTF-8 code points).
+//   legend width = 0 without named series, else 44 + 8 × the longest name's length in characters (UTF-8 code points).
 // A value v maps linearly from the first..last tick onto the plot area (upwards for y); on a log axis log10(v) does.
 inline constexpr double kChartLeft = 72, kChartRight = 16, kChartTop = 40, kChartBottom = 52;
 [[nodiscard]] double legend_width(const std::vector<Series>& series);
