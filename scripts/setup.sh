@@ -18,10 +18,14 @@ packages=(
   libtbb-dev                    # oneTBB threads
   libgtest-dev                  # GoogleTest
   libbenchmark-dev              # Google Benchmark
+  pybind11-dev python3-dev      # the Python package's compiled core
+  python3-numpy                 # its arrays
 )
 if [ "${1:-}" = "--tests" ]; then
   packages+=(
     python3                     # tests/io/check_report.py: the report's numbers against the JSON, its screenshot
+    python3-pytest              # the Python package's tests (tests/python)
+    python3-matplotlib          # the example examples/compensate_and_plot.py draws with it
     chromium                    # renders the HTML report headless: no console error, the 3-D view not blank
     fonts-dejavu-core           # a font for it to draw text with
   )

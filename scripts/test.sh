@@ -10,7 +10,8 @@ build_dir=build
 flags=(-DCMAKE_BUILD_TYPE=Release)
 if [ "${1:-}" = "--sanitize" ]; then
   build_dir=build-sanitize
-  flags=(-DCMAKE_BUILD_TYPE=Debug -DPROBECOMP_SANITIZE=ON -DPROBECOMP_BUILD_BENCH=OFF)
+  # No Python package: the interpreter would have to preload the sanitizers' runtime to load it.
+  flags=(-DCMAKE_BUILD_TYPE=Debug -DPROBECOMP_SANITIZE=ON -DPROBECOMP_BUILD_BENCH=OFF -DPROBECOMP_BUILD_PYTHON=OFF)
   # Stop at the first report, leaks included.
   export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}"
   export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp:print_suppressions=0}"

@@ -1,0 +1,392 @@
+// probecomp's Python bindings (pybind11): the extension module probecomp._probecomp, wrapped by the package
+// python/probecomp/__init__.py, which gives it its keyword arguments, units and documentation. numpy arrays in and
+// out (float64); the work runs with the GIL released; the library's errors become probecomp.Error and its kinds,
+// with the library's messages.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "probecomp/cad/model.hpp"
+#include "probecomp/compensation/conventional.hpp"
+#include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/error.hpp"
+#include "probecomp/geometry/stopwatch.hpp"
+#include "probecomp/io/dmis.hpp"
+#include "probecomp/io/output_files.hpp"
+#include "probecomp/io/point_table.hpp"
+#include "probecomp/io/qif.hpp"
+#include "probecomp/io/report.hpp"
+#include "probecomp/io/results.hpp"
+#include "probecomp/io/text.hpp"
+#include "probecomp/nurbs/surface.hpp"
+#include "probecomp/version.hpp"
+
+namespace py = pybind11;
+
+namespace probecomp::python {
+
+namespace {
+
+using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// An (N, 3) float64 array seen as N points without a copy: Eigen's Vector3d is three packed doubles.
+static_assert(sizeof(Point3) == 3 * sizeof(double) && alignof(Point3) <= alignof(double));
+std::span<const Point3> as_points(const Array& a, const char* name) {
+  if (a.ndim() != 2 || a.shape(1) != 3) {
+    throw std::invalid_argument(std::string(name) + " must be an (N, 3) array, not of shape " +
+                                std::string(py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()))))));
+  }
+  return {reinterpret_cast<const Point3*>(a.data()), static_cast<std::size_t>(a.shape(0))};
+}
+
+py::array_t<double> vectors(const std::vector<compensation::CompensatedPoint>& pts,
+                            Vector3 compensation::CompensatedPoint::*member) {
+  py::array_t<double> out({static_cast<py::ssize_t>(pts.size()), py::ssize_t{3}});
+  auto o = out.mutable_unchecked<2>();
+  for (std::size_t k = 0; k < pts.size(); ++k) {
+    // As the command line's empty fields: nothing where the row was not computed.
+    for (int c = 0; c < 3; ++c) o(static_cast<py::ssize_t>(k), c) = pts[k].computed() ? (pts[k].*member)(c) : std::nan("");
+  }
+  return out;
+}
+
+template <class T>
+py::array_t<T> column(const std::vector<compensation::CompensatedPoint>& pts, T (*of)(const compensation::CompensatedPoint&)) {
+  py::array_t<T> out(static_cast<py::ssize_t>(pts.size()));
+  auto o = out.template mutable_unchecked<1>();
+  for (std::size_t k = 0; k < pts.size(); ++k) o(static_cast<py::ssize_t>(k)) = of(pts[k]);
+  return out;
+}
+
+py::array_t<double> matrix(const Eigen::Matrix4d& M) {
+  py::array_t<double> out({py::ssize_t{4}, py::ssize_t{4}});
+  auto o = out.mutable_unchecked<2>();
+  for (int a = 0; a < 4; ++a) {
+    for (int b = 0; b < 4; ++b) o(a, b) = M(a, b);
+  }
+  return out;
+}
+
+// A run's result with what its statistics need (the inputs as the command line states them).
+struct Run {
+  compensation::CompensationResult result;
+  io::RunInputs inputs;
+  double seconds = 0.0;
+  std::vector<nurbs::Surface> part_surfaces;  // fit(): the fitted contact surfaces, one per fitted face
+  std::vector<int> part_faces;                // their faces' indices
+};
+
+Run run_compensate(const cad::Model& model, const Array& centres, const Array& radii, std::optional<double> probe_radius,
+                   const std::optional<Array>& normals, const std::string& method, const std::optional<Array>& initial,
+                   bool accept_doubtful, bool fit, const std::string& points_name, const std::string& unit) {
+  const std::span<const Point3> points = as_points(centres, "centres");
+  std::optional<std::span<const Vector3>> approach;
+  if (normals) {
+    approach = as_points(*normals, "normals");
+    if (approach->size() != points.size()) {
+      throw InputError("normals: " + std::to_string(approach->size()) + " rows for " + std::to_string(points.size()) +
+                       " centres");
+    }
+  }
+  compensation::CompensateOptions o;
+  if (method != "cad" && method != "conventional") {
+    throw std::invalid_argument("method must be 'cad' or 'conventional', not '" + method + "'");
+  }
+  o.method = method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
+  o.accept_doubtful_registration = accept_doubtful;
+  Run run;
+  run.inputs.cad = model.path.string();
+  run.inputs.points = points_name;
+  if (const auto u = io::length_unit(unit)) run.inputs.points_unit = *u;
+  run.inputs.probe_radius = probe_radius;
+  if (radii.size() > 0) {
+    if (radii.ndim() != 1 || static_cast<std::size_t>(radii.shape(0)) != points.size()) {
+      throw InputError("probe_radius: " + std::to_string(radii.size()) + " radii for " + std::to_string(points.size()) +
+                       " centres");
+    }
+    o.probe_radii.assign(radii.data(), radii.data() + radii.size());
+    run.inputs.tip_radii = o.probe_radii;
+    std::sort(run.inputs.tip_radii.begin(), run.inputs.tip_radii.end());
+    run.inputs.tip_radii.erase(std::unique(run.inputs.tip_radii.begin(), run.inputs.tip_radii.end()),
+                               run.inputs.tip_radii.end());
+    o.probe_radius = run.inputs.tip_radii.empty() ? 0.0 : run.inputs.tip_radii.front();
+  } else {
+    if (!probe_radius) throw std::invalid_argument("probe_radius is needed");
+    o.probe_radius = *probe_radius;
+    run.inputs.tip_radii = {*probe_radius};
+  }
+  if (initial) {
+    if (initial->ndim() != 2 || initial->shape(0) != 4 || initial->shape(1) != 4) {
+      throw std::invalid_argument("initial_transform must be a (4, 4) array");
+    }
+    Eigen::Matrix4d M;
+    for (int a = 0; a < 4; ++a) {
+      for (int b = 0; b < 4; ++b) M(a, b) = initial->at(a, b);
+    }
+    o.registration.initial = geometry::RigidTransform(M);
+  }
+  {
+    py::gil_scoped_release unlocked;
+    const geometry::Stopwatch clock;
+    run.result = compensation::compensate(model, points, approach, o);
+    if (fit) {
+      run.part_surfaces = compensation::fitted_part_surfaces(run.result);
+      for (const compensation::FaceReport& f : run.result.faces) {
+        if (f.fitted) run.part_faces.push_back(f.face);
+      }
+    }
+    run.seconds = clock.seconds();
+  }
+  return run;
+}
+
+// Surface points (or unit normals) at parameter arrays u and v of one shape: an array of that shape with a last axis
+// of 3.
+py::array_t<double> on_surface(const nurbs::Surface& s, const Array& u, const Array& v, bool normals) {
+  if (u.ndim() != v.ndim() || !std::equal(u.shape(), u.shape() + u.ndim(), v.shape())) {
+    throw std::invalid_argument("u and v must have the same shape");
+  }
+  std::vector<py::ssize_t> shape(u.shape(), u.shape() + u.ndim());
+  shape.push_back(3);
+  py::array_t<double> out(shape);
+  double* o = out.mutable_data();
+  const double* pu = u.data();
+  const double* pv = v.data();
+  const nurbs::Domain d = s.domain();
+  const auto n = static_cast<std::size_t>(u.size());
+  {
+    py::gil_scoped_release unlocked;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (!(pu[k] >= d.u0 && pu[k] <= d.u1 && pv[k] >= d.v0 && pv[k] <= d.v1)) {
+        for (int c = 0; c < 3; ++c) o[3 * k + static_cast<std::size_t>(c)] = std::nan("");
+        continue;
+      }
+      const Vector3 x = normals ? nurbs::unit_normal(s, pu[k], pv[k]).n : nurbs::evaluate(s, pu[k], pv[k]);
+      for (int c = 0; c < 3; ++c) o[3 * k + static_cast<std::size_t>(c)] = x(c);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+}  // namespace probecomp::python
+
+PYBIND11_MODULE(_probecomp, m) {
+  using namespace probecomp;
+  using namespace probecomp::python;
+  m.doc() = "probecomp's compiled core; use the package probecomp.";
+  m.attr("__version__") = version();
+
+  // Kinds of error, base first: pybind11 tries translators newest first, so each kind is found before its base.
+  auto& error = py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+  py::register_exception<InputError>(m, "InputError", error.ptr());
+  py::register_exception<CadError>(m, "CadError", error.ptr());
+  py::register_exception<RegistrationError>(m, "RegistrationError", error.ptr());
+  py::register_exception<FitError>(m, "FitError", error.ptr());
+
+  py::class_<cad::Model, std::shared_ptr<cad::Model>>(m, "CadModel")
+      .def(py::init([](const std::string& path) {
+             py::gil_scoped_release unlocked;
+             return std::make_shared<cad::Model>(cad::Model::load(path));
+           }),
+           py::arg("path"))
+      .def_property_readonly("path", [](const cad::Model& model) { return model.path.string(); })
+      .def_property_readonly("face_count", &cad::Model::face_count)
+      .def_property_readonly("units", [](const cad::Model& model) { return model.file_units; })
+      .def_property_readonly("face_names",
+                             [](const cad::Model& model) {
+                               std::vector<std::string> names;
+                               for (const cad::Face& f : model.faces) names.push_back(f.name);
+                               return names;
+                             })
+      .def_property_readonly("face_types",
+                             [](const cad::Model& model) {
+                               std::vector<std::string> types;
+                               for (const cad::Face& f : model.faces) types.push_back(f.source_type);
+                               return types;
+                             })
+      .def("surface",
+           [](const cad::Model& model, int index) {
+             if (index < 0 || index >= model.face_count()) {
+               throw py::index_error("face " + std::to_string(index) + " of a model of " +
+                                     std::to_string(model.face_count()) + " faces");
+             }
+             return model.faces[static_cast<std::size_t>(index)].surface;
+           },
+           py::arg("index"))
+      .def_property_readonly("face_boxes", [](const cad::Model& model) {
+        py::array_t<double> out({static_cast<py::ssize_t>(model.faces.size()), py::ssize_t{2}, py::ssize_t{3}});
+        auto o = out.mutable_unchecked<3>();
+        for (std::size_t f = 0; f < model.faces.size(); ++f) {
+          const BoundingBox box = nurbs::bounding_box(model.faces[f].surface);
+          for (int c = 0; c < 3; ++c) {
+            o(static_cast<py::ssize_t>(f), 0, c) = box.min(c);
+            o(static_cast<py::ssize_t>(f), 1, c) = box.max(c);
+          }
+        }
+        return out;
+      });
+
+  py::class_<nurbs::Surface>(m, "Surface")
+      .def_property_readonly("degrees", [](const nurbs::Surface& s) { return std::pair{s.p(), s.q()}; })
+      .def_property_readonly("control_point_count", [](const nurbs::Surface& s) { return std::pair{s.num_u(), s.num_v()}; })
+      .def_property_readonly("domain",
+                             [](const nurbs::Surface& s) {
+                               const nurbs::Domain d = s.domain();
+                               return std::tuple{d.u0, d.u1, d.v0, d.v1};
+                             })
+      .def("evaluate", [](const nurbs::Surface& s, const Array& u, const Array& v) { return on_surface(s, u, v, false); },
+           py::arg("u"), py::arg("v"))
+      .def("normal", [](const nurbs::Surface& s, const Array& u, const Array& v) { return on_surface(s, u, v, true); },
+           py::arg("u"), py::arg("v"));
+
+  py::class_<Run>(m, "Run")
+      .def_property_readonly("points", [](const Run& r) { return vectors(r.result.points, &compensation::CompensatedPoint::contact); })
+      .def_property_readonly("normals", [](const Run& r) { return vectors(r.result.points, &compensation::CompensatedPoint::normal); })
+      .def_property_readonly("deviation",
+                             [](const Run& r) {
+                               return column<double>(r.result.points, [](const compensation::CompensatedPoint& p) {
+                                 return p.computed() ? p.deviation : std::nan("");
+                               });
+                             })
+      .def_property_readonly("uncertainty",
+                             [](const Run& r) {
+                               return column<double>(r.result.points,
+                                                     [](const compensation::CompensatedPoint& p) {
+                                                       return p.computed() ? p.uncertainty : std::nan("");
+                                                     });
+                             })
+      .def_property_readonly("radius",
+                             [](const Run& r) {
+                               return column<double>(r.result.points,
+                                                     [](const compensation::CompensatedPoint& p) { return p.radius; });
+                             })
+      .def_property_readonly("face",
+                             [](const Run& r) {
+                               return column<std::int64_t>(r.result.points, [](const compensation::CompensatedPoint& p) {
+                                 return static_cast<std::int64_t>(p.face);
+                               });
+                             })
+      .def_property_readonly("status",
+                             [](const Run& r) {
+                               std::vector<std::string> s;
+                               for (const compensation::CompensatedPoint& p : r.result.points) s.push_back(compensation::to_string(p.status));
+                               return s;
+                             })
+      .def_property_readonly("transform", [](const Run& r) { return matrix(r.result.registration.transform.matrix()); })
+      .def_property_readonly("warnings", [](const Run& r) { return r.result.warnings; })
+      .def_property_readonly("surfaces", [](const Run& r) { return r.part_surfaces; })
+      .def_property_readonly("surface_faces", [](const Run& r) { return r.part_faces; })
+      .def("statistics_json",
+           [](const Run& r, std::optional<std::pair<double, double>> tolerance) {
+             std::optional<io::Tolerance> t;
+             if (tolerance) t = io::Tolerance{tolerance->first, tolerance->second};
+             return io::statistics_json(r.result, r.inputs, {.total = r.seconds}, t);
+           },
+           py::arg("tolerance") = std::nullopt)
+      .def("report_html",
+           [](const Run& r, const cad::Model& model, std::optional<std::pair<double, double>> tolerance) {
+             io::ReportContext c{.inputs = r.inputs, .tolerance = std::nullopt, .timings = {.total = r.seconds}};
+             if (tolerance) c.tolerance = io::Tolerance{tolerance->first, tolerance->second};
+             c.nominal = io::registered_outline(model, r.result.registration.transform);
+             return io::html_report(r.result, c);
+           },
+           py::arg("model"), py::arg("tolerance") = std::nullopt);
+
+  m.def("compensate", &run_compensate, py::arg("model"), py::arg("centres"), py::arg("radii"), py::arg("probe_radius"),
+        py::arg("normals"), py::arg("method"), py::arg("initial_transform"), py::arg("accept_doubtful_registration"),
+        py::arg("fit"), py::arg("points_name"), py::arg("unit"));
+
+  m.def("parse_tolerance", [](const std::string& text) {
+    const io::Tolerance t = io::parse_tolerance(text);
+    return std::pair{t.lower, t.upper};
+  });
+
+  // A point file: (points mm, normals or None, radii mm or None, unit name, {carried column: values as text}).
+  m.def("read_points", [](const std::string& path, const std::string& unit) {
+    std::optional<io::LengthUnit> declared;
+    if (!unit.empty()) {
+      declared = io::length_unit(unit);
+      if (!declared) throw std::invalid_argument("units must be mm, cm, meter, inch or feet, not '" + unit + "'");
+    }
+    io::PointTable t;
+    {
+      py::gil_scoped_release unlocked;
+      t = io::read_points(path, declared);
+    }
+    const auto n = static_cast<py::ssize_t>(t.points.size());
+    py::array_t<double> points({n, py::ssize_t{3}});
+    if (n > 0) std::copy_n(t.points.front().data(), 3 * t.points.size(), points.mutable_data());
+    py::object normals = py::none(), radii = py::none();
+    if (t.normals && n > 0) {
+      py::array_t<double> a({n, py::ssize_t{3}});
+      std::copy_n(t.normals->front().data(), 3 * t.normals->size(), a.mutable_data());
+      normals = a;
+    }
+    if (t.radii) {
+      py::array_t<double> a(n);
+      std::copy(t.radii->begin(), t.radii->end(), a.mutable_data());
+      radii = a;
+    }
+    py::dict columns;
+    for (int c : t.carried_columns()) {
+      py::list values;
+      for (const auto& row : t.rows) values.append(row[static_cast<std::size_t>(c)]);
+      columns[py::str(t.columns[static_cast<std::size_t>(c)])] = values;
+    }
+    return py::make_tuple(points, normals, radii, std::string(t.unit.name), columns);
+  });
+
+  // Writes points (mm) as CSV, DMIS or QIF by the extension, in `unit`; all or nothing.
+  m.def("write_points", [](const std::string& path, const Array& points, const std::optional<Array>& normals,
+                           const std::optional<Array>& radii, const std::string& unit,
+                           const std::vector<std::pair<std::string, std::vector<std::string>>>& columns) {
+    io::PointTable t;
+    const auto u = io::length_unit(unit);
+    if (!u) throw std::invalid_argument("units must be mm, cm, meter, inch or feet, not '" + unit + "'");
+    t.unit = *u;
+    const std::span<const Point3> p = as_points(points, "points");
+    t.points.assign(p.begin(), p.end());
+    t.columns = {"x", "y", "z"};
+    if (normals) {
+      const std::span<const Vector3> n = as_points(*normals, "normals");
+      if (n.size() != p.size()) throw InputError("normals: " + std::to_string(n.size()) + " rows for " + std::to_string(p.size()) + " points");
+      t.normals.emplace(n.begin(), n.end());
+      t.columns.insert(t.columns.end(), {"i", "j", "k"});
+    }
+    if (radii) {
+      if (radii->ndim() != 1 || static_cast<std::size_t>(radii->shape(0)) != p.size()) {
+        throw InputError("radii: " + std::to_string(radii->size()) + " for " + std::to_string(p.size()) + " points");
+      }
+      t.radii.emplace(radii->data(), radii->data() + radii->size());
+      t.columns.push_back("r");
+    }
+    const std::size_t ours = t.columns.size();
+    for (const auto& [name, values] : columns) {
+      if (values.size() != p.size()) {
+        throw InputError("column " + name + ": " + std::to_string(values.size()) + " values for " + std::to_string(p.size()) + " points");
+      }
+      t.columns.push_back(name);
+    }
+    if (!columns.empty()) {
+      t.rows.assign(p.size(), std::vector<std::string>(ours));  // empty number fields: the values above are used
+      for (const auto& [name, values] : columns) {
+        for (std::size_t k = 0; k < p.size(); ++k) t.rows[k].push_back(values[k]);
+      }
+    }
+    py::gil_scoped_release unlocked;
+    const std::string text = io::is_qif(path) ? io::points_qif(t) : io::is_dmis(path) ? io::points_dmis(t, path) : io::points_csv(t);
+    io::OutputFiles files;
+    files.add(path, text);
+    files.commit();
+  });
+}
