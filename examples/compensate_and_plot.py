@@ -5,8 +5,10 @@
 
 e.g. on the demo's files (probecomp demo --output-dir build/demo):
     PYTHONPATH=build/python python3 examples/compensate_and_plot.py build/demo/nominal.igs build/demo/raw.csv 1
-Without matplotlib (Debian's python3-matplotlib) it prints the figures and skips the plot.
+Without matplotlib (Debian's python3-matplotlib) it prints the figures and skips the plot. The "# %%" lines mark
+cells, as Jupyter (jupytext) and editors that run cells read them.
 """
+# %%
 import sys
 
 import numpy as np
@@ -16,12 +18,12 @@ import probecomp
 cad, points, radius = sys.argv[1], sys.argv[2], float(sys.argv[3])
 png = sys.argv[4] if len(sys.argv) > 4 else "deviations.png"
 
-# 1. The nominal part and the measurement.
+# %% 1. The nominal part and the measurement.
 model = probecomp.CadModel(cad)
 raw = probecomp.read_points(points)
 print("%s: %d faces; %s: %d points in %s" % (cad, model.face_count, points, len(raw), raw.units))
 
-# 2. Compensate: register to the radius-offset model, fit, offset along the fitted normal.
+# %% 2. Compensate: register to the radius-offset model, fit, offset along the fitted normal.
 res = probecomp.compensate(model, raw.points, probe_radius=radius, normals=raw.normals, units=raw.units)
 ok = np.array([s == "ok" for s in res.status])
 d = res.deviation[ok] * 1000  # um
@@ -31,7 +33,7 @@ print("registration: %s, RMS %.4f mm" % (res.stats["registration"]["status"], re
 for w in res.warnings:
     print("warning:", w)
 
-# 3. Plot: the deviation map seen from above and its histogram.
+# %% 3. Plot: the deviation map seen from above and its histogram.
 try:
     import matplotlib
     import matplotlib.pyplot as plt

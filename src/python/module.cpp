@@ -193,7 +193,10 @@ PYBIND11_MODULE(_probecomp, m) {
   py::register_exception<RegistrationError>(m, "RegistrationError", error.ptr());
   py::register_exception<FitError>(m, "FitError", error.ptr());
 
-  py::class_<cad::Model, std::shared_ptr<cad::Model>>(m, "CadModel")
+  py::class_<cad::Model, std::shared_ptr<cad::Model>>(m, "CadModel",
+                                                     "A part's faces from a STEP or IGES file, as NURBS with their trims and "
+                                                     "material sides, in mm (CadModel(path); raises CadError for a file "
+                                                     "that cannot be read or used).")
       .def(py::init([](const std::string& path) {
              py::gil_scoped_release unlocked;
              return std::make_shared<cad::Model>(cad::Model::load(path));
@@ -236,7 +239,9 @@ PYBIND11_MODULE(_probecomp, m) {
         return out;
       });
 
-  py::class_<nurbs::Surface>(m, "Surface")
+  py::class_<nurbs::Surface>(m, "Surface",
+                             "A NURBS surface (mm): evaluate(u, v) and normal(u, v) on arrays of parameters, NaN outside "
+                             "domain = (u0, u1, v0, v1).")
       .def_property_readonly("degrees", [](const nurbs::Surface& s) { return std::pair{s.p(), s.q()}; })
       .def_property_readonly("control_point_count", [](const nurbs::Surface& s) { return std::pair{s.num_u(), s.num_v()}; })
       .def_property_readonly("domain",
