@@ -113,6 +113,8 @@ def test_the_demo_gives_the_clis_numbers(demo, work):
         assert res.stats[key] == theirs[key], key
     assert np.abs(res.transform - np.array(theirs["transform"])).max() < 1e-12
     assert [f["face"] for f in res.stats["faces"]] == [f["face"] for f in theirs["faces"]]
+    html = res.report_html(model)  # the command line's --report page
+    assert '<canvas id="view"' in html and "<td>7200</td>" in html
 
 
 def test_a_held_out_free_form_case_gives_the_clis_numbers_and_meets_the_truth(heldout, demo, work, capsys):
