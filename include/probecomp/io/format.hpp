@@ -19,8 +19,15 @@ inline std::string exact(double v) {
   const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v + 0.0);
   return std::string(buf, ec == std::errc() ? end : buf);
 }
-inline std::string mm(double v) { return fmt("%.9f", v); }
-inline std::string unit(double v) { return fmt("%.12f", v); }
+// `precision` decimals, correctly rounded as printf's %.Nf (std::to_chars is specified to give printf's text, and
+// is several times faster: a million-row output writes 7 million of these).
+inline std::string fixed(double v, int precision) {
+  char buf[400];  // |v| up to 1.8e308 written out in full, and the decimals
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v + 0.0, std::chars_format::fixed, precision);
+  return ec == std::errc() ? std::string(buf, end) : fmt("%f", v);
+}
+inline std::string mm(double v) { return fixed(v, 9); }
+inline std::string unit(double v) { return fixed(v, 12); }
 
 inline std::string json_string(const std::string& s) {
   std::string out = "\"";
