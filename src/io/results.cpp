@@ -78,27 +78,32 @@ std::string compensated_csv(const PointTable& t, const compensation::Compensatio
   const bool radius_column = t.radii.has_value();
   std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "u", "face", "status"};
   if (radius_column) ours.push_back("r");
-  std::ostringstream out;
-  for (std::size_t c = 0; c < ours.size(); ++c) out << (c ? "," : "") << ours[c];
-  out << t.carried_header(ours) << '\n';
+  // Appended to one string, numbers by std::to_chars: a million rows is 115 MB of text (bench/io_bench.cpp).
+  std::string out;
+  out.reserve(160 * (r.points.size() + 1));
+  for (std::size_t c = 0; c < ours.size(); ++c) out.append(c ? "," : "").append(ours[c]);
+  out.append(t.carried_header(ours)).push_back('\n');
+  const bool carried = !t.carried_columns().empty();
   const double scale = 1.0 / t.unit.mm;  // mm → the input's unit
   for (std::size_t k = 0; k < r.points.size(); ++k) {
     const compensation::CompensatedPoint& p = r.points[k];
     if (p.computed()) {
       const Point3 x = scale * p.contact;
-      out << mm(x.x()) << ',' << mm(x.y()) << ',' << mm(x.z()) << ',' << unit(p.normal.x()) << ','
-          << unit(p.normal.y()) << ',' << unit(p.normal.z()) << ',' << mm(scale * p.deviation) << ','
-          << mm(scale * p.uncertainty) << ',' << p.face << ',';
+      for (double v : {x.x(), x.y(), x.z()}) append_fixed(out, v, 9).push_back(',');
+      for (double v : {p.normal.x(), p.normal.y(), p.normal.z()}) append_fixed(out, v, 12).push_back(',');
+      append_fixed(out, scale * p.deviation, 9).push_back(',');
+      append_fixed(out, scale * p.uncertainty, 9).push_back(',');
+      out.append(std::to_string(p.face)).push_back(',');
     } else {
       // Never dropped: the row is there, empty, with the reason.
-      out << ",,,,,,,," << (p.face >= 0 ? std::to_string(p.face) : "") << ',';
+      out.append(",,,,,,,,").append(p.face >= 0 ? std::to_string(p.face) : "").push_back(',');
     }
-    out << compensation::to_string(p.status);
-    if (radius_column) out << ',' << mm(scale * p.radius);
-    out << t.carried_fields(k);
-    out << '\n';
+    out.append(compensation::to_string(p.status));
+    if (radius_column) append_fixed(out.append(","), scale * p.radius, 9);
+    if (carried) out.append(t.carried_fields(k));
+    out.push_back('\n');
   }
-  return out.str();
+  return out;
 }
 
 std::string compensated_dmis(const PointTable& t, const compensation::CompensationResult& r, const std::string& source) {

@@ -26,6 +26,12 @@ inline std::string fixed(double v, int precision) {
   const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v + 0.0, std::chars_format::fixed, precision);
   return ec == std::errc() ? std::string(buf, end) : fmt("%f", v);
 }
+// The same, appended to `out` (no string of its own): for writers of many rows.
+inline std::string& append_fixed(std::string& out, double v, int precision) {
+  char buf[400];
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v + 0.0, std::chars_format::fixed, precision);
+  return ec == std::errc() ? out.append(buf, end) : out.append(fmt("%f", v));
+}
 inline std::string mm(double v) { return fixed(v, 9); }
 inline std::string unit(double v) { return fixed(v, 12); }
 
