@@ -75,14 +75,15 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
     // A UTF-8 byte-order mark, as spreadsheet programs write, is not part of the first column's name.
     if (number == 1 && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);
     const std::string text = trim(line);  // and CRLF's CR
-    const std::string where = name + ":" + std::to_string(number) + ": ";
+    // Built only for a message: a million-row file would otherwise build a million of them.
+    auto where = [&] { return name + ":" + std::to_string(number) + ": "; };
     if (!have_header && text.starts_with('#') && lower(trim(text.substr(1))).starts_with("lengths in ")) {
       // The file's own statement of its unit, as points_csv writes it: what --units would otherwise have to say.
       const std::string stated = trim(trim(text.substr(1)).substr(std::string("lengths in ").size()));
       const std::optional<LengthUnit> u = length_unit(stated);
-      if (!u) throw InputError(where + "unknown length unit '" + stated + "' (known: mm, cm, meter, inch, feet)");
+      if (!u) throw InputError(where() + "unknown length unit '" + stated + "' (known: mm, cm, meter, inch, feet)");
       if (declared && !(*u == *declared)) {
-        throw InputError(where + "the file says its lengths are in " + u->name + ", not in " + declared->name +
+        throw InputError(where() + "the file says its lengths are in " + u->name + ", not in " + declared->name +
                          " as --units says");
       }
       unit = *u;
@@ -90,25 +91,30 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
     }
     if (text.empty() || text[0] == '#') continue;
     if (!have_header) separator = detect_separator(text);
-    std::vector<std::string> fields = split_fields(text, separator, where);
+    std::vector<std::string> fields;
+    try {
+      fields = split_fields(text, separator, "");
+    } catch (const InputError& e) {
+      throw InputError(where() + e.what());
+    }
     if (!have_header) {
       t.columns = fields;
       for (int c = 0; c < static_cast<int>(fields.size()); ++c) {
         const std::string n = lower(fields[static_cast<std::size_t>(c)]);
         int* slot = n == "x" ? &ix : n == "y" ? &iy : n == "z" ? &iz : n == "i" ? &ii : n == "j" ? &ij : n == "k" ? &ik : n == "r" ? &ir : nullptr;
         if (slot != nullptr) {
-          if (*slot >= 0) throw InputError(where + "column '" + n + "' appears twice in the header");
+          if (*slot >= 0) throw InputError(where() + "column '" + n + "' appears twice in the header");
           *slot = c;
         }
       }
-      if (ix < 0 || iy < 0 || iz < 0) throw InputError(where + "the header must name columns x, y and z");
+      if (ix < 0 || iy < 0 || iz < 0) throw InputError(where() + "the header must name columns x, y and z");
       const int n_normal = (ii >= 0) + (ij >= 0) + (ik >= 0);
-      if (n_normal != 0 && n_normal != 3) throw InputError(where + "the header names some of i, j, k but not all three");
+      if (n_normal != 0 && n_normal != 3) throw InputError(where() + "the header names some of i, j, k but not all three");
       have_header = true;
       continue;
     }
     if (fields.size() != t.columns.size()) {
-      throw InputError(where + "expected " + std::to_string(t.columns.size()) + " fields, found " + std::to_string(fields.size()));
+      throw InputError(where() + "expected " + std::to_string(t.columns.size()) + " fields, found " + std::to_string(fields.size()));
     }
     auto number_at = [&](int c) {
       std::string& f = fields[static_cast<std::size_t>(c)];
@@ -118,15 +124,15 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
       }
       const std::optional<double> value = parse_number(f);
       if (!value) {
-        throw InputError(where + "column '" + t.columns[static_cast<std::size_t>(c)] + "' is not a number: '" + f + "'");
+        throw InputError(where() + "column '" + t.columns[static_cast<std::size_t>(c)] + "' is not a number: '" + f + "'");
       }
-      if (!std::isfinite(*value)) throw InputError(where + "column '" + t.columns[static_cast<std::size_t>(c)] + "' is not finite");
+      if (!std::isfinite(*value)) throw InputError(where() + "column '" + t.columns[static_cast<std::size_t>(c)] + "' is not finite");
       return *value;
     };
     t.points.emplace_back(unit.mm * number_at(ix), unit.mm * number_at(iy), unit.mm * number_at(iz));
     if (ii >= 0) {
       Vector3 n(number_at(ii), number_at(ij), number_at(ik));
-      if (!(n.norm() > 0.0)) throw InputError(where + "the normal i, j, k is zero");
+      if (!(n.norm() > 0.0)) throw InputError(where() + "the normal i, j, k is zero");
       normals.push_back(n.normalized());
     }
     if (ir >= 0) {
@@ -134,7 +140,7 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
         radii.push_back(std::numeric_limits<double>::quiet_NaN());
       } else {
         const double r = number_at(ir);
-        if (!(r > 0.0)) throw InputError(where + "column 'r' (the tip radius) must be positive, not " + fields[static_cast<std::size_t>(ir)]);
+        if (!(r > 0.0)) throw InputError(where() + "column 'r' (the tip radius) must be positive, not " + fields[static_cast<std::size_t>(ir)]);
         radii.push_back(unit.mm * r);
       }
     }

@@ -53,6 +53,20 @@ namespace probecomp::io {
 [[nodiscard]] inline std::vector<std::string> split_fields(const std::string& line, char separator,
                                                            const std::string& where) {
   std::vector<std::string> out;
+  if (line.find('"') == std::string::npos) {
+    // No quotes (the usual machine-written line): cut at each separator, blanks trimmed, one string per field.
+    const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };  // as trim()
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t end = std::min(line.find(separator, start), line.size());
+      std::size_t a = start, b = end;
+      while (a < b && blank(line[a])) ++a;
+      while (b > a && blank(line[b - 1])) --b;
+      out.emplace_back(line, a, b - a);
+      if (end == line.size()) return out;
+      start = end + 1;
+    }
+  }
   std::string field;
   bool quoted = false, was_quoted = false;
   for (std::size_t k = 0; k < line.size(); ++k) {
