@@ -6,6 +6,7 @@
 #include <sstream>
 #include <utility>
 
+#include "probecomp/io/charts.hpp"  // xml_escape
 #include "probecomp/io/format.hpp"
 #include "probecomp/version.hpp"
 #include "report_view.hpp"  // generated from src/io/report_view.js
@@ -16,20 +17,6 @@ namespace {
 
 using compensation::CompensatedPoint;
 using compensation::PointStatus;
-
-std::string escaped(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 std::string mm4(double v) { return fmt("%.4f", v); }
 std::string mm6(double v) { return fmt("%.6f", v); }
@@ -42,7 +29,7 @@ std::string histogram_svg(const std::vector<double>& values, const std::optional
   constexpr double kWidth = 640, kHeight = 240, kLeft = 50, kBottom = 34, kTop = 10, kRight = 16;
   std::ostringstream s;
   s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth << "\" height=\"" << kHeight
-    << "\" role=\"img\" aria-label=\"" << escaped(label) << "\">\n";
+    << "\" role=\"img\" aria-label=\"" << xml_escape(label) << "\">\n";
   if (values.empty()) {
     s << "<text x=\"10\" y=\"20\">no trusted points</text></svg>\n";
     return s.str();
@@ -88,7 +75,7 @@ std::string histogram_svg(const std::vector<double>& values, const std::optional
       << "text-anchor=\"" << (t == 0 ? "start" : t == 4 ? "end" : "middle") << "\">" << fmt("%.2f", v) << "</text>\n";
   }
   s << "<text x=\"" << kLeft + plot_w / 2 << "\" y=\"" << kHeight - 3 << "\" font-size=\"11\" text-anchor=\"middle\">"
-    << escaped(label) << " (" << unit << ")</text>\n<text x=\"4\" y=\"" << kTop + 10 << "\" font-size=\"11\">" << most
+    << xml_escape(label) << " (" << unit << ")</text>\n<text x=\"4\" y=\"" << kTop + 10 << "\" font-size=\"11\">" << most
     << "</text>\n</svg>\n";
   return s.str();
 }
@@ -268,7 +255,7 @@ std::string html_report(const compensation::CompensationResult& r, const ReportC
   const RunInputs& in = c.inputs;
   std::ostringstream h;
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>probecomp report: "
-    << escaped(in.points) << "</title>\n<style>"
+    << xml_escape(in.points) << "</title>\n<style>"
        "body{font-family:sans-serif;margin:1.5em;color:#222;max-width:1400px}"
        "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #bbb;padding:2px 8px;text-align:right}"
        "th{background:#eee}td.l,th.l{text-align:left}.fail{color:#c62828;font-weight:bold}.warn{color:#8a5a00}"
@@ -276,13 +263,13 @@ std::string html_report(const compensation::CompensationResult& r, const ReportC
        "</style></head><body>\n";
   h << "<h1>probecomp: " << compensation::to_string(r.method) << " compensation</h1>\n";
   // The inputs.
-  h << "<table id=\"inputs\"><tr><th class=\"l\">CAD</th><td class=\"l\">" << escaped(in.cad)
-    << "</td></tr><tr><th class=\"l\">points</th><td class=\"l\">" << escaped(in.points) << " (" << r.points.size()
+  h << "<table id=\"inputs\"><tr><th class=\"l\">CAD</th><td class=\"l\">" << xml_escape(in.cad)
+    << "</td></tr><tr><th class=\"l\">points</th><td class=\"l\">" << xml_escape(in.points) << " (" << r.points.size()
     << " rows, lengths in " << in.points_unit.name << ")</td></tr><tr><th class=\"l\">tip radii (mm)</th><td class=\"l\">";
   for (std::size_t k = 0; k < in.tip_radii.size(); ++k) h << (k ? ", " : "") << fmt("%.9g", in.tip_radii[k]);
   h << "</td></tr><tr><th class=\"l\">tolerance (mm)</th><td class=\"l\">"
     << (c.tolerance ? mm4(c.tolerance->lower) + " to " + mm4(c.tolerance->upper) : std::string("none"))
-    << "</td></tr><tr><th class=\"l\">probecomp</th><td class=\"l\">" << escaped(version()) << "</td></tr></table>\n";
+    << "</td></tr><tr><th class=\"l\">probecomp</th><td class=\"l\">" << xml_escape(version()) << "</td></tr></table>\n";
   // Counts by status.
   h << "<h2>Points by status</h2>\n<table id=\"counts\"><tr>";
   for (PointStatus s : compensation::kPointStatuses) h << "<th>" << compensation::to_string(s) << "</th>";
@@ -363,13 +350,13 @@ std::string html_report(const compensation::CompensationResult& r, const ReportC
       << "</td><td>" << mm6(d.std) << "</td><td>" << mm6(d.min) << "</td><td>" << mm6(d.max) << "</td>";
     if (c.tolerance) h << "<td" << (d.out_of_tolerance > 0 ? " class=\"fail\"" : "") << ">" << d.out_of_tolerance << "</td>";
     h << "<td>" << fmt("%.2f", 1000.0 * x.mean_uncertainty) << "</td><td class=\"l\">"
-      << (x.fitted ? "fitted: " : "not fitted: ") << escaped(x.stop_reason) << "</td></tr>\n";
+      << (x.fitted ? "fitted: " : "not fitted: ") << xml_escape(x.stop_reason) << "</td></tr>\n";
   }
   h << "</table>\n";
   // Registration.
   const registration::RegistrationResult& g = r.registration;
   h << "<h2>Registration</h2>\n<p id=\"registration\">" << registration::to_string(g.status) << ": "
-    << escaped(g.stop_reason) << "; RMS " << mm6(g.rms) << " mm, robust scale " << mm6(g.scale) << " mm, "
+    << xml_escape(g.stop_reason) << "; RMS " << mm6(g.rms) << " mm, robust scale " << mm6(g.scale) << " mm, "
     << g.inliers << " inliers, " << g.starts << " start(s)</p>\n<table id=\"transform\"><caption>CAD to machine"
     << "</caption>";
   const Eigen::Matrix4d M = g.transform.matrix();
@@ -395,7 +382,7 @@ std::string html_report(const compensation::CompensationResult& r, const ReportC
   }
   if (!r.warnings.empty()) {
     h << "<h2>Warnings</h2>\n<ul id=\"warnings\">";
-    for (const std::string& w : r.warnings) h << "<li class=\"warn\">" << escaped(w) << "</li>";
+    for (const std::string& w : r.warnings) h << "<li class=\"warn\">" << xml_escape(w) << "</li>";
     h << "</ul>\n";
   }
   const compensation::Timings& t = r.seconds;
