@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
@@ -123,13 +124,24 @@ compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Met
 // (standard output last, once every file is in place).
 void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation::CompensationResult& r) {
   const Stopwatch clock;
-  const std::string text = io::is_qif(a.output)                      ? io::compensated_qif(l.table, r, a.points)
-                           : !a.output.empty() && io::is_dmis(a.output) ? io::compensated_dmis(l.table, r, a.points)
-                                                                        : io::compensated_csv(l.table, r);
+  // CSV, the usual output of a scan, goes to its file block by block; DMIS and QIF are built whole.
+  const bool csv = !io::is_qif(a.output) && !(!a.output.empty() && io::is_dmis(a.output));
+  const std::string text = io::is_qif(a.output) ? io::compensated_qif(l.table, r, a.points)
+                           : !csv               ? io::compensated_dmis(l.table, r, a.points)
+                                                : std::string();
   std::optional<io::Tolerance> tolerance;
   if (!a.tolerance.empty()) tolerance = io::parse_tolerance(a.tolerance);
   io::OutputFiles files;
-  if (!a.output.empty()) files.add(a.output, text);
+  if (!a.output.empty() && csv) {
+    files.add(a.output, [&](const std::filesystem::path& temporary) {
+      std::ofstream out(temporary, std::ios::binary);
+      io::write_compensated_csv(out, l.table, r);
+      out.flush();
+      if (!out) throw InputError(a.output + ": cannot be written");
+    });
+  } else if (!a.output.empty()) {
+    files.add(a.output, text);
+  }
   const io::FileTimings timings{.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()};
   if (!a.report.empty()) {
     io::ReportContext context{.inputs = l.inputs, .tolerance = tolerance, .timings = timings};
@@ -142,7 +154,7 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
   }
   if (!a.json.empty()) files.add(a.json, io::statistics_json(r, l.inputs, timings, tolerance));
   files.commit();
-  if (a.output.empty()) std::cout << text;
+  if (a.output.empty()) io::write_compensated_csv(std::cout, l.table, r);
 }
 
 void print_summary_row(std::ostream& out, const char* name, const studies::ErrorSummary& s) {

@@ -73,14 +73,16 @@ DeviationSummaries summarise_deviations(const compensation::CompensationResult& 
   return out;
 }
 
-std::string compensated_csv(const PointTable& t, const compensation::CompensationResult& r) {
+void write_compensated_csv(std::ostream& stream, const PointTable& t, const compensation::CompensationResult& r) {
   // The tip radius of each row when the input gave any (the default filled in where a row's was empty).
   const bool radius_column = t.radii.has_value();
   std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "u", "face", "status"};
   if (radius_column) ours.push_back("r");
-  // Appended to one string, numbers by std::to_chars: a million rows is 115 MB of text (bench/io_bench.cpp).
+  // Rows go out in blocks, each built in one reused string with std::to_chars: a million rows are 115 MB of text
+  // that never has to be held whole (bench/io_bench.cpp).
+  constexpr std::size_t kBlockRows = 8192;
   std::string out;
-  out.reserve(160 * (r.points.size() + 1));
+  out.reserve(160 * kBlockRows);
   for (std::size_t c = 0; c < ours.size(); ++c) out.append(c ? "," : "").append(ours[c]);
   out.append(t.carried_header(ours)).push_back('\n');
   const bool carried = !t.carried_columns().empty();
@@ -102,8 +104,18 @@ std::string compensated_csv(const PointTable& t, const compensation::Compensatio
     if (radius_column) append_fixed(out.append(","), scale * p.radius, 9);
     if (carried) out.append(t.carried_fields(k));
     out.push_back('\n');
+    if ((k + 1) % kBlockRows == 0) {
+      stream.write(out.data(), static_cast<std::streamsize>(out.size()));
+      out.clear();
+    }
   }
-  return out;
+  stream.write(out.data(), static_cast<std::streamsize>(out.size()));
+}
+
+std::string compensated_csv(const PointTable& t, const compensation::CompensationResult& r) {
+  std::ostringstream out;
+  write_compensated_csv(out, t, r);
+  return out.str();
 }
 
 std::string compensated_dmis(const PointTable& t, const compensation::CompensationResult& r, const std::string& source) {

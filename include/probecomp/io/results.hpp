@@ -3,6 +3,7 @@
 // statistics as JSON; a summary page in HTML. Lengths with 9 decimals (nm), unit vectors with 12.
 
 #include <optional>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -16,6 +17,8 @@ namespace probecomp::io {
 // columns (renamed input_NAME where they clash with ours), lengths in the input's unit. A point that was not computed keeps its row: empty fields and the reason in
 // `status`.
 [[nodiscard]] std::string compensated_csv(const PointTable& input, const compensation::CompensationResult& result);
+// The same, written to `out` block by block (the whole text is never held: a million rows are 115 MB).
+void write_compensated_csv(std::ostream& out, const PointTable& input, const compensation::CompensationResult& result);
 
 // One DMIS FA(label) point per computed point (labels from the input's label or id column, else P1, P2, ...),
 // with its deviation, face and status in a comment; a comment line for each point not computed. Lengths in the
