@@ -95,9 +95,7 @@ Loaded load(const std::string& cad_path, const std::string& points_path, std::op
   if (l.radii.empty()) {
     l.inputs.tip_radii = {*default_mm};
   } else {
-    l.inputs.tip_radii = l.radii;
-    std::sort(l.inputs.tip_radii.begin(), l.inputs.tip_radii.end());
-    l.inputs.tip_radii.erase(std::unique(l.inputs.tip_radii.begin(), l.inputs.tip_radii.end()), l.inputs.tip_radii.end());
+    l.inputs.tip_radii = io::distinct_radii(l.radii);
   }
   l.seconds = l.run.seconds();
   return l;
@@ -125,14 +123,14 @@ compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Met
 void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation::CompensationResult& r) {
   const Stopwatch clock;
   // CSV, the usual output of a scan, goes to its file block by block; DMIS and QIF are built whole.
-  const bool csv = !io::is_qif(a.output) && !(!a.output.empty() && io::is_dmis(a.output));
-  const std::string text = io::is_qif(a.output) ? io::compensated_qif(l.table, r, a.points)
-                           : !csv               ? io::compensated_dmis(l.table, r, a.points)
-                                                : std::string();
+  const bool qif = io::is_qif(a.output), dmis = !a.output.empty() && io::is_dmis(a.output);
+  const std::string text = qif ? io::compensated_qif(l.table, r, a.points)
+                           : dmis ? io::compensated_dmis(l.table, r, a.points)
+                                  : std::string();
   std::optional<io::Tolerance> tolerance;
   if (!a.tolerance.empty()) tolerance = io::parse_tolerance(a.tolerance);
   io::OutputFiles files;
-  if (!a.output.empty() && csv) {
+  if (!a.output.empty() && !qif && !dmis) {
     files.add(a.output, [&](const std::filesystem::path& temporary) {
       std::ofstream out(temporary, std::ios::binary);
       io::write_compensated_csv(out, l.table, r);

@@ -66,27 +66,46 @@ std::optional<LengthUnit> parse_units(const Statement& s, const std::string& nam
   return u;
 }
 
+// A labelled statement `L(label)=BODY` or its actual `LA(label)=BODY` (L the letter, F for features and S for
+// sensors), spaces removed: the label as written, BODY upper-cased and as written, and where BODY starts.
+struct Labelled {
+  bool actual = false;
+  std::string text, label, body;  // text: the statement without spaces; body: upper-cased
+  std::size_t body_at = 0;        // index of BODY in text
+};
+std::optional<Labelled> labelled(const Statement& s, char letter) {
+  Labelled l;
+  l.text = without_spaces(s.text);
+  const std::string head = upper(l.text);
+  l.actual = head.starts_with(std::string{letter, 'A', '('});
+  if (!l.actual && !head.starts_with(std::string{letter, '('})) return std::nullopt;
+  const auto close = l.text.find(')');
+  const auto eq = l.text.find('=', close == std::string::npos ? 0 : close);
+  if (close == std::string::npos || eq == std::string::npos) return std::nullopt;
+  const std::size_t open = l.actual ? 3 : 2;
+  l.label = l.text.substr(open, close - open);
+  l.body_at = eq + 1;
+  l.body = head.substr(l.body_at);
+  return l;
+}
+
 // A point definition, or nothing for any other statement.
 std::optional<DmisPoint> parse_point(const Statement& s, const std::string& name) {
   const std::string where = name + ":" + std::to_string(s.line) + ": ";
-  const std::string text = without_spaces(s.text);
-  const std::string head = upper(text);
-  const bool actual = head.starts_with("FA(");
-  if (!actual && !head.starts_with("F(")) return std::nullopt;
-  const auto close = text.find(')');
-  const auto eq = text.find('=', close == std::string::npos ? 0 : close);
-  if (close == std::string::npos || eq == std::string::npos) return std::nullopt;
-  const std::string body = head.substr(eq + 1);
+  const std::optional<Labelled> l = labelled(s, 'F');
+  if (!l) return std::nullopt;
+  const std::string& text = l->text;
+  const std::string& body = l->body;
   if (!body.starts_with("FEAT/POINT")) return std::nullopt;  // another feature type
   if (!body.starts_with("FEAT/POINT,CART,")) {
     throw InputError(where + "only FEAT/POINT,CART,x,y,z,i,j,k points are read (polar points are not)");
   }
   DmisPoint p;
-  p.actual = actual;
+  p.actual = l->actual;
   p.line = s.line;
-  p.label = text.substr(actual ? 3 : 2, close - (actual ? 3 : 2));
+  p.label = l->label;
   std::vector<double> v;
-  std::istringstream in(text.substr(eq + 1 + std::string("FEAT/POINT,CART,").size()));
+  std::istringstream in(text.substr(l->body_at + std::string("FEAT/POINT,CART,").size()));
   std::string field;
   while (std::getline(in, field, ',')) {
     const std::optional<double> value = parse_number(field);
@@ -123,22 +142,15 @@ std::vector<std::string> fields_after(const std::string& text, std::size_t start
 // (a trailing SPHERE names the ball). Any other form (a DISC or CYLNDR tip, another sensor type) is kept with the
 // reason it is not read: a file may define sensors it never measures with.
 std::optional<Sensor> parse_sensor(const Statement& s, const std::string& name, LengthUnit unit) {
-  const std::string text = without_spaces(s.text);
-  const std::string head = upper(text);
-  const bool actual = head.starts_with("SA(");
-  if (!actual && !head.starts_with("S(")) return std::nullopt;
-  const auto close = text.find(')');
-  const auto eq = text.find('=', close == std::string::npos ? 0 : close);
-  if (close == std::string::npos || eq == std::string::npos || !head.substr(eq + 1).starts_with("SNSDEF/")) {
-    return std::nullopt;
-  }
+  const std::optional<Labelled> l = labelled(s, 'S');
+  if (!l || !l->body.starts_with("SNSDEF/")) return std::nullopt;
+  const std::string& text = l->text;
   Sensor x;
-  const std::size_t open = actual ? 3 : 2;
-  x.name = text.substr(open, close - open);
-  x.definition = text.substr(eq + 1);
+  x.name = l->label;
+  x.definition = text.substr(l->body_at);
   x.line = s.line;
   x.unit = unit;
-  const std::vector<std::string> f = fields_after(text, eq + 1 + std::string("SNSDEF/").size());
+  const std::vector<std::string> f = fields_after(text, l->body_at + std::string("SNSDEF/").size());
   const auto is = [&](std::size_t k, const char* word) { return k < f.size() && upper(f[k]) == word; };
   if (!is(0, "PROBE") || !(is(1, "INDEX") || is(1, "FIXED")) || !(is(2, "POL") || is(2, "CART"))) {
     x.problem = "only ball tips defined as SNSDEF/PROBE,INDEX|FIXED,POL,tilt,rotate,i,j,k,length,diameter or "

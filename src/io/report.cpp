@@ -325,19 +325,11 @@ std::string html_report(const compensation::CompensationResult& r, const ReportC
          "approach normal), along the normal used. This is the error the conventional method makes where the "
          "part's actual normal differs from the programmed one.</p>\n<figure id=\"difference\">"
       << histogram_svg(diff, std::nullopt, "&#181;m", "CAD-based minus conventional") << "</figure>\n";
-    double sum = 0.0, largest = 0.0;
-    for (double d : diff) {
-      sum += d;
-      largest = std::max(largest, std::abs(d));
-    }
-    const double mean = diff.empty() ? 0.0 : sum / static_cast<double>(diff.size());
-    double sq = 0.0;
-    for (double d : diff) sq += (d - mean) * (d - mean);
+    const DeviationSummary d = summarise(diff, std::nullopt);
     h << "<table id=\"difference-summary\"><tr><th>points</th><th>mean (&micro;m)</th><th>std (&micro;m)</th>"
          "<th>largest |difference| (&micro;m)</th></tr><tr><td>"
-      << diff.size() << "</td><td>" << fmt("%.2f", mean) << "</td><td>"
-      << fmt("%.2f", diff.empty() ? 0.0 : std::sqrt(sq / static_cast<double>(diff.size()))) << "</td><td>"
-      << fmt("%.2f", largest) << "</td></tr></table>\n";
+      << d.points << "</td><td>" << fmt("%.2f", d.mean) << "</td><td>" << fmt("%.2f", d.std) << "</td><td>"
+      << fmt("%.2f", std::max(std::abs(d.min), std::abs(d.max))) << "</td></tr></table>\n";
   }
   // Faces.
   h << "<h2>Faces</h2>\n<table id=\"faces\"><tr><th>face</th><th>points</th><th>ok</th><th>mean (mm)</th>"

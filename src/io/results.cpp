@@ -14,11 +14,7 @@
 
 namespace probecomp::io {
 
-namespace {
-
-// Trusted deviations summarised; the spread in two passes (micrometre deviations about a mean that may be
-// millimetres), as compensation::statistics does.
-DeviationSummary summary_of(const std::vector<double>& d, const std::optional<Tolerance>& tolerance) {
+DeviationSummary summarise(const std::vector<double>& d, const std::optional<Tolerance>& tolerance) {
   DeviationSummary s;
   s.points = static_cast<int>(d.size());
   if (d.empty()) return s;
@@ -38,7 +34,11 @@ DeviationSummary summary_of(const std::vector<double>& d, const std::optional<To
   return s;
 }
 
-}  // namespace
+std::vector<double> distinct_radii(std::vector<double> radii) {
+  std::sort(radii.begin(), radii.end());
+  radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
+  return radii;
+}
 
 Tolerance parse_tolerance(const std::string& text) {
   const auto comma = text.find(',');
@@ -67,9 +67,9 @@ DeviationSummaries summarise_deviations(const compensation::CompensationResult& 
   DeviationSummaries out;
   for (const compensation::FaceReport& f : r.faces) {
     const auto found = by_face.find(f.face);
-    out.faces.push_back(summary_of(found == by_face.end() ? std::vector<double>{} : found->second, tolerance));
+    out.faces.push_back(summarise(found == by_face.end() ? std::vector<double>{} : found->second, tolerance));
   }
-  out.all = summary_of(all, tolerance);
+  out.all = summarise(all, tolerance);
   return out;
 }
 

@@ -113,10 +113,7 @@ Run run_compensate(const cad::Model& model, const Array& centres, const Array& r
                        " centres");
     }
     o.probe_radii.assign(radii.data(), radii.data() + radii.size());
-    run.inputs.tip_radii = o.probe_radii;
-    std::sort(run.inputs.tip_radii.begin(), run.inputs.tip_radii.end());
-    run.inputs.tip_radii.erase(std::unique(run.inputs.tip_radii.begin(), run.inputs.tip_radii.end()),
-                               run.inputs.tip_radii.end());
+    run.inputs.tip_radii = io::distinct_radii(o.probe_radii);
     o.probe_radius = run.inputs.tip_radii.empty() ? 0.0 : run.inputs.tip_radii.front();
   } else {
     if (!probe_radius) throw std::invalid_argument("probe_radius is needed");

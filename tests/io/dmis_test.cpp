@@ -43,15 +43,17 @@ TEST(Dmis, FeaturePointsAreReadWhenThereAreNoActuals) {
   EXPECT_FALSE(t.normals.has_value());
 }
 
+// The message read_point_dmis throws for a file of `text`, or "no error".
+std::string message(const std::string& name, const std::string& text) {
+  try {
+    (void)io::read_point_dmis(write(name, text));
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
 TEST(Dmis, ErrorsNameTheFileAndLine) {
-  auto message = [](const std::string& name, const std::string& text) {
-    try {
-      (void)io::read_point_dmis(write(name, text));
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
   EXPECT_NE(message("c.dmo", "FA(A)=FEAT/POINT,CART,1,2\n").find("c.dmo:1: point A has 2 numbers"), std::string::npos);
   EXPECT_NE(message("d.dmo", "\nFA(A)=FEAT/POINT,CART,1,x,3\n").find("d.dmo:2:"), std::string::npos);
   EXPECT_NE(message("e.dmo", "FA(A)=FEAT/POINT,CART,1,2,3,0,0,0\n").find("zero"), std::string::npos);
@@ -159,14 +161,6 @@ TEST(Dmis, FilesWithoutSelectionsReadAsBefore) {
 }
 
 TEST(Dmis, SensorErrorsNameTheFileAndLine) {
-  auto message = [](const std::string& name, const std::string& text) {
-    try {
-      (void)io::read_point_dmis(write(name, text));
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
   const std::string point = "FA(P1)=FEAT/POINT,CART,1,2,3\n";
   EXPECT_NE(message("e1.dmo", "S(A)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,1,6,2\nSNSLCT/S(B)\n" + point)
                 .find("e1.dmo:2: SNSLCT selects S(B), which no SNSDEF before it defines"),

@@ -42,6 +42,9 @@ struct RunInputs {
   std::vector<double> tip_radii{};
 };
 
+// The distinct values of `radii`, ascending (RunInputs::tip_radii of points with radii of their own).
+[[nodiscard]] std::vector<double> distinct_radii(std::vector<double> radii);
+
 // A deviation passes when lower ≤ deviation ≤ upper (mm).
 struct Tolerance {
   double lower = 0.0, upper = 0.0;
@@ -58,6 +61,10 @@ struct DeviationSummary {
   double mean = 0.0, std = 0.0, min = 0.0, max = 0.0;
   int out_of_tolerance = 0;
 };
+
+// Count, mean, population std (in two passes: micrometre spreads about a mean that may be millimetres), min, max of
+// `values`, and with a tolerance how many fall outside it.
+[[nodiscard]] DeviationSummary summarise(const std::vector<double>& values, const std::optional<Tolerance>& tolerance);
 
 // Per face of result.faces, in that order (its points: those whose `face` is the face's index), and overall.
 struct DeviationSummaries {
