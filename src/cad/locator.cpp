@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 
 #include "probecomp/geometry/point_tree.hpp"
 #include "probecomp/geometry/parallel.hpp"
@@ -186,7 +187,8 @@ ClosestPointResult TrimmedFaceLocator::closest_point_on_boundary(const Point3& q
   return best;
 }
 
-ClosestPointResult TrimmedFaceLocator::closest_point(const Point3& query, double limit, bool& on_trim_edge) const {
+ClosestPointResult TrimmedFaceLocator::closest_point(const Point3& query, double limit, bool& on_trim_edge,
+                                                     const ClosestPointResult* known) const {
   on_trim_edge = false;
   // The limit enters the surface search as a bound that is not a point (u is NaN): cells farther are skipped.
   ClosestPointResult bound;
@@ -196,7 +198,7 @@ ClosestPointResult TrimmedFaceLocator::closest_point(const Point3& query, double
     const ClosestPointResult edge = closest_point_on_boundary(query, limit);
     if (edge.distance < limit) bound = edge;
   }
-  ClosestPointResult r = solver_.closest_point(query, bound);
+  ClosestPointResult r = solver_.closest_point(query, bound, known);
   on_trim_edge = face_->trimmed() && !none_nearer(r) && r.u == bound.u && r.v == bound.v && r.distance == bound.distance;
   return r;
 }
@@ -272,10 +274,11 @@ Vector3 ModelLocator::outward_normal(int face, double u, double v) const {
   return static_cast<double>(f.outward) * n.n;
 }
 
-void ModelLocator::visit_face(const Point3& query, int f, ModelPoint& best) const {
+void ModelLocator::visit_face(const Point3& query, int f, ModelPoint& best, const ClosestPointResult* known) const {
   if (box_distance(boxes_[static_cast<std::size_t>(f)], query) > std::abs(best.distance)) return;
   bool on_edge = false;
-  const ClosestPointResult r = faces_[static_cast<std::size_t>(f)]->closest_point(query, std::abs(best.distance), on_edge);
+  const ClosestPointResult r =
+      faces_[static_cast<std::size_t>(f)]->closest_point(query, std::abs(best.distance), on_edge, known);
   if (TrimmedFaceLocator::none_nearer(r)) return;
   if (!r.ok()) {
     if (best.face < 0) best.status = r.status;
@@ -370,7 +373,7 @@ ModelPoint ModelLocator::closest_point(const Point3& query, const ModelPoint& hi
   // The local foot point bounds the answer. Its own face is searched again for anything strictly nearer
   // (another minimum, or its trim boundary), then every other face the hierarchy cannot rule out.
   ModelPoint best = make_point(query, hint.face, local, false);
-  if (mode == HintedSearch::Exact) visit_face(query, hint.face, best);
+  if (mode == HintedSearch::Exact) visit_face(query, hint.face, best, &local);
   search(query, best, hint.face);
   return best;
 }
@@ -380,6 +383,14 @@ std::vector<ModelPoint> ModelLocator::closest_points(std::span<const Point3> que
   if (hints.size() != queries.size()) return closest_points(queries);
   return geometry::parallel_map<ModelPoint>(queries.size(), 64,
                                             [&](std::size_t i) { return closest_point(queries[i], hints[i], mode); });
+}
+
+void ModelLocator::update_closest_points(std::span<const Point3> queries, std::span<ModelPoint> feet,
+                                         HintedSearch mode) const {
+  if (feet.size() != queries.size()) throw std::invalid_argument("update_closest_points: one foot per query expected");
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, queries.size(), 64), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) feet[i] = closest_point(queries[i], feet[i], mode);
+  });
 }
 
 std::vector<ModelPoint> ModelLocator::closest_points(std::span<const Point3> queries) const {

@@ -48,7 +48,7 @@ std::vector<simulation::ProgrammedPoint> programmed_points(const SimulateArgs& a
       int face = -1;
       if (face_column >= 0) {
         try {
-          face = std::stoi(t.rows[k][static_cast<std::size_t>(face_column)]);
+          face = std::stoi(std::string(t.rows[k][static_cast<std::size_t>(face_column)]));
         } catch (const std::logic_error&) {
           face = -1;
         }

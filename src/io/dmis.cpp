@@ -314,7 +314,7 @@ PointTable read_point_dmis(const std::filesystem::path& path, std::optional<Leng
       radii.push_back(p.tip->unit.mm * p.tip->diameter / 2);
       t.sensor_definitions.emplace(p.tip->name, p.tip->definition);
     }
-    t.rows.push_back(std::move(row));
+    t.rows.push_back(row);
   }
   if (with_normals) t.normals = std::move(normals);
   if (with_tips) t.radii = std::move(radii);
@@ -334,7 +334,7 @@ std::string dmis_units(LengthUnit unit) { return "UNITS/" + upper(unit.name) + "
 std::string dmis_label(const PointTable& t, std::size_t k) {
   for (std::size_t c = 0; c < t.columns.size(); ++c) {
     const std::string n = lower(t.columns[c]);
-    if ((n == "label" || n == "id") && k < t.rows.size()) return t.rows[k][c];
+    if ((n == "label" || n == "id") && k < t.rows.size()) return std::string(t.rows[k][c]);
   }
   std::string label = "P";
   label += std::to_string(k + 1);
@@ -355,7 +355,7 @@ DmisTips::DmisTips(const PointTable& t, const std::vector<double>& radii) : tip_
       continue;
     }
     const std::string given =
-        tip_column >= 0 && k < t.rows.size() ? t.rows[k][static_cast<std::size_t>(tip_column)] : std::string();
+        tip_column >= 0 && k < t.rows.size() ? std::string(t.rows[k][static_cast<std::size_t>(tip_column)]) : std::string();
     const auto [at, added] = by_name_and_radius.emplace(std::pair(given, r), static_cast<int>(tips_.size()));
     tip_of_row_[k] = at->second;
     if (!added) continue;

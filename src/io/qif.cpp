@@ -351,7 +351,7 @@ Runs runs_of(const PointTable& t) {
   const int c = column_index(t, "set");
   const std::size_t n = t.points.size();
   const auto value = [&](std::size_t k) {
-    return c >= 0 && k < t.rows.size() ? t.rows[k][static_cast<std::size_t>(c)] : std::string();
+    return c >= 0 && k < t.rows.size() ? std::string(t.rows[k][static_cast<std::size_t>(c)]) : std::string();
   };
   for (std::size_t k = 0; k < n; ++k) {
     if (k == 0 || value(k) != value(k - 1)) r.runs.push_back({k, k, 0});
@@ -615,7 +615,7 @@ PointTable read_point_qif(const std::filesystem::path& path, std::optional<Lengt
         // (A column named set holds the table's own set values, kept when they were not ids: they replace the ids.)
         row[static_cast<std::size_t>(std::find(t.columns.begin(), t.columns.end(), name) - t.columns.begin())] = fields[k];
       }
-      t.rows.push_back(std::move(row));
+      t.rows.push_back(row);
       t.line.push_back(line);
     }
   }

@@ -170,6 +170,7 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
     << registration::to_string(r.registration.status) << "\", \"stop_reason\": " << json_string(r.registration.stop_reason)
     << ", \"rms\": " << fmt("%.9g", r.registration.rms)
     << ", \"iterations\": " << r.registration.iterations + r.registration.coarse_iterations
+    << ", \"searches\": " << r.registration.searches
     << ", \"scale\": " << fmt("%.9g", r.registration.scale) << ", \"inliers\": " << r.registration.inliers
     << ", \"starts\": " << r.registration.starts << ", \"free_motions\": [";
   // Machine frame, as the transform maps to: the motions the data do not fix, held at the start.

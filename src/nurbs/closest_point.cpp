@@ -673,7 +673,24 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query) const 
   return closest_point(query, ClosestPointResult{});
 }
 
-ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const ClosestPointResult& bound) const {
+long ClosestPointSolver::cell_holding(double u, double v) const {
+  const Seeds& sd = *seeds_;
+  auto cell_along = [](const CellAxis& axis, double t) -> int {
+    const auto& b = axis.breaks;
+    if (!(t >= b.front() && t <= b.back())) return -1;
+    const int s = std::clamp(static_cast<int>(std::upper_bound(b.begin(), b.end(), t) - b.begin()) - 1, 0, axis.spans() - 1);
+    const int per = axis.cells_in(s);
+    const int c = axis.first[static_cast<std::size_t>(s)] +
+                  std::clamp(static_cast<int>((t - b[s]) / (b[s + 1] - b[s]) * per), 0, per - 1);
+    return axis.lower(c) <= t && t <= axis.upper(c) ? c : -1;
+  };
+  const int cu = cell_along(sd.axis_u, u), cv = cell_along(sd.axis_v, v);
+  if (cu < 0 || cv < 0) return -1;
+  return static_cast<long>(cu) * sd.axis_v.count() + cv;
+}
+
+ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const ClosestPointResult& bound,
+                                                     const ClosestPointResult* known) const {
   const Seeds& sd = *seeds_;
   if (!query.allFinite()) {
     ClosestPointResult bad;
@@ -731,12 +748,18 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   if (!candidates.empty()) {
     std::iter_swap(candidates.begin(), std::min_element(candidates.begin(), candidates.end()));
   }
+  long skip = -1;
+  if (known != nullptr && known->ok()) {
+    const Iterate at = make_iterate(surface_, query, known->u, known->v, {});
+    if (flatness(hessian(at)) >= kFocalFlatness) skip = cell_holding(known->u, known->v);
+  }
   auto may_hold_closer = [&](std::uint32_t k) {
     const Vector3 q_minus_c = query - sd.seed[k];
     return sd.box[k].lower_bound(q_minus_c) < best.distance &&
            sd.box[k].may_hold_critical_point(q_minus_c, sd.cone_tan[k]);
   };
   for (const auto& [seed_sq, k] : candidates) {
+    if (static_cast<long>(k) == skip) continue;
     if (!std::isfinite(best.distance) || may_hold_closer(k)) search_cell(query, k, 1, search);
   }
   // Near a centre of curvature the distance is flat: a cell may hold two minima, of which Newton finds one, and

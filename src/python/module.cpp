@@ -342,7 +342,7 @@ PYBIND11_MODULE(_probecomp, m) {
     py::dict columns;
     for (int c : t.carried_columns()) {
       py::list values;
-      for (const auto& row : t.rows) values.append(row[static_cast<std::size_t>(c)]);
+      for (const auto row : t.rows) values.append(py::str(row[static_cast<std::size_t>(c)]));
       columns[py::str(t.columns[static_cast<std::size_t>(c)])] = values;
     }
     return py::make_tuple(points, normals, radii, std::string(t.unit.name), columns);
@@ -380,9 +380,11 @@ PYBIND11_MODULE(_probecomp, m) {
       t.columns.push_back(name);
     }
     if (!columns.empty()) {
-      t.rows.assign(p.size(), std::vector<std::string>(ours));  // empty number fields: the values above are used
-      for (const auto& [name, values] : columns) {
-        for (std::size_t k = 0; k < p.size(); ++k) t.rows[k].push_back(values[k]);
+      std::vector<std::string> row;
+      for (std::size_t k = 0; k < p.size(); ++k) {
+        row.assign(ours, std::string());  // empty number fields: the values above are used
+        for (const auto& column : columns) row.push_back(column.second[k]);
+        t.rows.push_back(row);
       }
     }
     py::gil_scoped_release unlocked;

@@ -181,6 +181,17 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   Point3 centroid = Point3::Zero();
   double length = 1.0;
 
+  // Robust weights and scale from the residuals r of the points in use.
+  auto reweigh = [&]() {
+    used_r.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (use[i]) used_r.push_back(r[i]);
+    }
+    scale = geometry::robust_scale(used_r, options.robust.min_scale);
+    for (std::size_t i = 0; i < n; ++i) w[i] = use[i] ? robust_weight(options.robust.loss, r[i], scale) : 0.0;
+    return used_r.size();
+  };
+
   // Correspondences at the current transform. The first pass searches the whole model; later ones start
   // Newton from the previous feet and, while the estimate moves, skip re-searching each point's own face for
   // other minima (Local). Convergence is only accepted after an exact pass (the global search, bounded by the
@@ -188,7 +199,11 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   using Search = cad::ModelLocator::HintedSearch;
   auto correspond = [&](Search mode) {
     for (std::size_t i = 0; i < n; ++i) x[i] = to_cad * machine_points[i];
-    feet = feet.empty() ? model.closest_points(x) : model.closest_points(x, feet, mode);
+    if (feet.empty()) {
+      feet = model.closest_points(x);
+    } else {
+      model.update_closest_points(x, feet, mode);
+    }
     if (!offsets.empty()) {
       moved = feet;
       for (std::size_t i = 0; i < n; ++i) {
@@ -196,29 +211,47 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
         moved[i].distance -= offsets[i];
       }
     }
-    used_r.clear();
     for (std::size_t i = 0; i < n; ++i) {
       const cad::ModelPoint& m = targets[i];
       use[i] = x[i].allFinite() && usable(m, options.max_distance);
       r[i] = !use[i] ? 0.0 : options.metric == Metric::PointToPlane ? m.distance : (x[i] - m.point).norm();
-      w[i] = use[i] ? 1.0 : 0.0;
-      if (use[i]) used_r.push_back(r[i]);
     }
-    scale = geometry::robust_scale(used_r, options.robust.min_scale);
+    return reweigh();
+  };
+  // Point-to-plane between correspondences: the points moved by `motion` against their feet's tangent planes.
+  // For a motion D since the feet were found, a plane differs from the surface by about κD²/2 (κ its curvature):
+  // while D stays within the residuals' own scale this is far below it, and reweighting on the planes converges
+  // the robust weights (IRLS, linear: many steps) at the cost of a pass over the arrays instead of a closest-point
+  // search each step. A later exact search corrects what the planes miss.
+  auto slide_on_planes = [&](const geometry::RigidTransform& motion) {
     for (std::size_t i = 0; i < n; ++i) {
-      if (w[i] != 0.0) w[i] = robust_weight(options.robust.loss, r[i], scale);
+      x[i] = motion * x[i];
+      if (use[i]) r[i] = targets[i].normal.dot(x[i] - targets[i].point);
     }
-    return used_r.size();
+    return reweigh();
   };
 
   result.status = Status::MaxIterations;
   geometry::Twist previous_step = geometry::Twist::Zero();
-  bool exact = true;  // the correspondences of this pass are exact closest points
+  bool exact = true;         // the correspondences of this step are exact closest points
+  bool search_next = true;   // the next step searches its correspondences (else it slides on the last ones' planes)
   Search next = Search::Local;
+  geometry::RigidTransform last_motion = geometry::RigidTransform::Identity();
   const bool hinted_start = !feet.empty();
+  double drift = 0.0;  // largest motion of a point since its correspondence was found, mm
+  double reach = 0.0;  // how far points may slide on their tangent planes before a new search, mm
+  std::size_t used = 0;
   for (int it = 1; it <= options.criteria.max_iterations; ++it) {
-    exact = (it == 1 && !hinted_start) || next == Search::Exact;
-    const std::size_t used = correspond(next);
+    const bool fresh = search_next;  // correspondences found at the current transform
+    if (fresh) {
+      exact = (it == 1 && !hinted_start) || next == Search::Exact;
+      used = correspond(next);
+      ++result.searches;
+      drift = 0.0;
+      reach = scale;
+    } else {
+      used = slide_on_planes(last_motion);
+    }
     result.iterations = it;
     if (used < needed) {
       result.status = Status::TooFewPoints;
@@ -258,7 +291,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
     // updates point the same way and shrink by a steady ratio ρ (about 0.2 with Cauchy weights on Gaussian
     // noise, against quadratic convergence without weights). When two updates agree so, the remaining ones sum
     // to ρ/(1 − ρ) of the last, and taking them at once (Aitken's extrapolation along the same screw) saves the
-    // iterations; the next pass corrects what the extrapolation misses. 1M points: 6 passes → 3.
+    // iterations; the next step corrects what the extrapolation misses.
     geometry::RigidTransform motion = step.motion;
     const geometry::Twist xi = geometry::to_twist(step.motion);
     geometry::Twist scaled = xi;
@@ -270,6 +303,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
     }
     previous_step = scaled;
     to_cad = motion * to_cad;
+    last_motion = motion;
     // The update acts on the points in the CAD frame; their box moves with them, so bound about its image.
     const double moved = geometry::largest_motion(motion, centre, max_radius);
     centre = motion * centre;
@@ -277,15 +311,19 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
     const double tolerance =
         std::max(options.criteria.motion_tolerance,
                  options.criteria.relative_motion_tolerance * scale / std::sqrt(static_cast<double>(used)));
+    drift += moved;
     if (moved <= tolerance) {
-      if (exact) {
+      if (fresh && exact) {
         result.status = Status::Converged;
         result.stop_reason = "converged: the last update moved no point more than " + describe(moved);
         break;
       }
+      // Settled on these correspondences: confirm them with an exact search where the points now are.
       next = Search::Exact;
+      search_next = true;
     } else {
       next = Search::Local;
+      search_next = options.metric != Metric::PointToPlane || drift > reach;
     }
     if (it == options.criteria.max_iterations) {
       result.stop_reason = "iteration limit " + std::to_string(it) + " reached; the last update moved points up to " +

@@ -178,6 +178,31 @@ TEST(ModelLocator, AHintFromANearbyQueryGivesTheSameAnswer) {
   EXPECT_GT(same_face, 0.99 * static_cast<double>(after.size()));  // ties between faces at an edge may differ
 }
 
+TEST(ModelLocator, FeetUpdatedInPlaceEqualTheUnhintedSearch) {
+  // ICP's exact pass: each foot, found before a small motion, is replaced by the closest point after it. Its own
+  // cell is not searched again (ClosestPointSolver's `known`), so the answer must still be the unhinted search's.
+  const Model model = read_model(kCadDir / "gismo_hammer.iges");
+  const ModelLocator locator(model);
+  const std::vector<Point3> before = points_around(model, 3000, 11);
+  std::vector<Point3> after;
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> step(-0.05, 0.05);
+  for (const Point3& p : before) after.push_back(p + Vector3(step(rng), step(rng), step(rng)));
+  std::vector<ModelPoint> feet = locator.closest_points(before);
+  const std::vector<ModelPoint> plain = locator.closest_points(after);
+  locator.update_closest_points(after, feet, ModelLocator::HintedSearch::Exact);
+  int same_face = 0;
+  for (std::size_t k = 0; k < after.size(); ++k) {
+    ASSERT_EQ(plain[k].ok(), feet[k].ok()) << k;
+    if (!plain[k].ok()) continue;
+    EXPECT_NEAR(std::abs(feet[k].distance), std::abs(plain[k].distance), 1e-9) << k;
+    same_face += feet[k].face == plain[k].face;
+  }
+  EXPECT_GT(same_face, 0.99 * static_cast<double>(after.size()));
+  std::vector<ModelPoint> wrong(after.size() - 1);
+  EXPECT_THROW(locator.update_closest_points(after, wrong), std::invalid_argument);
+}
+
 TEST(ModelLocator, SignedDistanceIsPositiveOutsideASolid) {
   // repatch-hpdc is a closed solid: points pushed out along the outward normal are outside the material.
   const Model model = read_model(kCadDir / "asitus_wavy-cube.stp");

@@ -207,7 +207,9 @@ TEST(Dmis, OutputsDefineEachTipOnceAndSelectItWhenItChanges) {
   EXPECT_EQ(*back.radii, *t.radii);
   // A tip name met with two radii is two tips; a row without a radius after one with is refused.
   t.columns.push_back("tip");
-  for (auto& row : t.rows) row.push_back("T");
+  io::Fields tagged;
+  for (const auto row : t.rows) tagged.push_back({std::string(row[0]), std::string(row[1]), std::string(row[2]), "T"});
+  t.rows = tagged;
   EXPECT_NE(io::points_dmis(t, "in.csv").find("S(T_2)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,1,0,0.5\n"), std::string::npos);
   (*t.radii)[2] = std::nan("");
   EXPECT_THROW((void)io::points_dmis(t, "in.csv"), InputError);

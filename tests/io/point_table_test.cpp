@@ -102,6 +102,34 @@ TEST(PointsCsv, EveryRowWithItsNumbersAsReadAndTheCarriedColumns) {
   EXPECT_EQ(points_csv(t), "x,y,z,i,j,k,r,id\n1.5,0,0.001,0,0,2,,a;b\n2,3,4,1,0,0,0.25,7\n");
 }
 
+TEST(Fields, RowsOfAnyLengthComeBackAsWritten) {
+  Fields f;
+  EXPECT_TRUE(f.empty());
+  f.push_back({"1.5", "", "a,b"});
+  f.push_back({});
+  f.push_back({"x"});
+  f.push_back({"", ""});
+  f.shrink_to_fit();
+  ASSERT_EQ(f.size(), 4u);
+  ASSERT_EQ(f[0].size(), 3u);
+  EXPECT_EQ(f[0][0], "1.5");
+  EXPECT_EQ(f[0][1], "");
+  EXPECT_EQ(f[0][2], "a,b");
+  EXPECT_EQ(f[1].size(), 0u);
+  ASSERT_EQ(f[2].size(), 1u);
+  EXPECT_EQ(f[2][0], "x");
+  ASSERT_EQ(f[3].size(), 2u);
+  EXPECT_EQ(f[3][0], "");
+  EXPECT_EQ(f[3][1], "");
+  std::size_t rows = 0, fields = 0;
+  for (const auto row : f) {
+    ++rows;
+    fields += row.size();
+  }
+  EXPECT_EQ(rows, 4u);
+  EXPECT_EQ(fields, 6u);
+}
+
 }  // namespace
 }  // namespace probecomp::io
 

@@ -7,7 +7,9 @@
 #include <map>
 #include <optional>
 #include <stdexcept>
+#include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "probecomp/error.hpp"
@@ -16,9 +18,61 @@
 
 namespace probecomp::io {
 
+// Every data row's fields as written (quotes removed), packed into one buffer: a row costs its text and one
+// offset a field, where a vector of strings cost about 450 bytes a row of seven numbers (1 M rows: 450 MB).
+class Fields {
+ public:
+  class Row {
+   public:
+    [[nodiscard]] std::string_view operator[](std::size_t c) const { return fields_->field(k_, c); }
+    [[nodiscard]] std::size_t size() const { return count_; }
+
+   private:
+    friend class Fields;
+    Row(const Fields* fields, std::size_t k, std::size_t count) : fields_(fields), k_(k), count_(count) {}
+    const Fields* fields_;
+    std::size_t k_, count_;
+  };
+  class Iterator {
+   public:
+    Iterator(const Fields* fields, std::size_t k) : fields_(fields), k_(k) {}
+    Row operator*() const { return (*fields_)[k_]; }
+    Iterator& operator++() {
+      ++k_;
+      return *this;
+    }
+    bool operator!=(const Iterator& o) const { return k_ != o.k_; }
+
+   private:
+    const Fields* fields_;
+    std::size_t k_;
+  };
+
+  void push_back(const std::vector<std::string>& row);
+  // Room for this much text (a file's size bounds its fields' text), and no spare room once all rows are in.
+  void reserve_text(std::size_t bytes) { text_.reserve(bytes); }
+  void shrink_to_fit();
+  [[nodiscard]] Row operator[](std::size_t k) const { return {this, k, row_first_[k + 1] - row_first_[k]}; }
+  [[nodiscard]] std::size_t size() const { return row_first_.size() - 1; }
+  [[nodiscard]] bool empty() const { return size() == 0; }
+  [[nodiscard]] Iterator begin() const { return {this, 0}; }
+  [[nodiscard]] Iterator end() const { return {this, size()}; }
+
+ private:
+  [[nodiscard]] std::string_view field(std::size_t k, std::size_t c) const {
+    const std::size_t f = row_first_[k] + c;
+    const std::size_t start = c == 0 ? 0 : field_end_[f - 1];
+    return std::string_view(text_).substr(row_text_[k] + start, field_end_[f] - start);
+  }
+  std::string text_;                          // every field's text, one after another
+  std::vector<std::uint64_t> row_text_{0};    // where each row's text starts in text_; one more: the end
+  std::vector<std::uint64_t> row_first_{0};   // each row's first field in field_end_; one more: the end
+  std::vector<std::uint32_t> field_end_;      // where each field ends, from its row's start
+};
+
 struct PointTable {
   std::vector<std::string> columns;            // every header name, in file order
-  std::vector<std::vector<std::string>> rows;  // every data row's fields, as written (quotes removed)
+  Fields rows;                                 // every data row's fields, as written (quotes removed)
   std::vector<int> line;                       // the file line of each row (from 1)
   LengthUnit unit = kMillimetre;               // the file's length unit: what its rows hold, and outputs for it use
   std::vector<Point3> points;                  // x, y, z of each row, in mm

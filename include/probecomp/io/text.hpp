@@ -37,8 +37,8 @@ namespace probecomp::io {
 
 // A field for a comma-separated output: as it is, or in double quotes (its quotes doubled) when it holds a comma,
 // a quote or a line break (RFC 4180), so that a field read from a quoted input is written back whole.
-[[nodiscard]] inline std::string csv_field(const std::string& s) {
-  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+[[nodiscard]] inline std::string csv_field(std::string_view s) {
+  if (s.find_first_of(",\"\r\n") == std::string_view::npos) return std::string(s);
   std::string out = "\"";
   for (char c : s) {
     if (c == '"') out += '"';

@@ -101,7 +101,12 @@ class ClosestPointSolver {
   [[nodiscard]] ClosestPointResult closest_point(const Point3& query) const;
   // The closer of `bound` (a point already known, e.g. the nearest point of a trimmed face's boundary) and
   // the surface's minima inside the region; cells farther than the bound are not searched.
-  [[nodiscard]] ClosestPointResult closest_point(const Point3& query, const ClosestPointResult& bound) const;
+  // `known`, when given, is a minimum of this surface inside the region that Newton found from a start of the
+  // caller's (a hint): the cell holding it is not searched again, unless the distance is flat there (where a cell
+  // may hold two minima). A search from that cell's centre would find one minimum in it too, so the answer is
+  // the one without `known`, to the solver's one-minimum-per-cell limit, at one Newton less per query.
+  [[nodiscard]] ClosestPointResult closest_point(const Point3& query, const ClosestPointResult& bound,
+                                                 const ClosestPointResult* known = nullptr) const;
   // One result per query, in order; parallel (oneTBB), deterministic.
   [[nodiscard]] std::vector<ClosestPointResult> closest_points(std::span<const Point3> queries) const;
 
@@ -113,6 +118,8 @@ class ClosestPointSolver {
   void search_cell(const Point3& query, std::uint32_t k, int parts, Search& search) const;
   // Newton from the centre of `box`, a part of one cell whose knot spans are `spans`, kept inside it.
   void search_box(const Point3& query, const Domain& box, KnotSpans spans, Search& search) const;
+  // The cell whose parameter box holds (u, v), or −1 when rounding leaves that in doubt.
+  [[nodiscard]] long cell_holding(double u, double v) const;
 
   Surface surface_;
   ClosestPointOptions options_;

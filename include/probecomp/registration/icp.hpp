@@ -72,6 +72,7 @@ struct RegistrationResult {
   double rms = 0.0;            // RMS distance of the inliers, mm
   double scale = 0.0;          // robust scale σ̂ of the residuals at the end, mm
   int iterations = 0;           // on all points
+  int searches = 0;             // closest-point searches of all points; the other iterations slide on tangent planes
   int coarse_iterations = 0;    // on the subset first (large point sets; see kCoarseStagePoints)
   int starts = 1;               // starting transforms tried (more than one: a coarse alignment, credibility.hpp)
   int used = 0;                // correspondences used in the last step (not on an edge, within max_distance)
