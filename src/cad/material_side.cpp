@@ -3,9 +3,19 @@
 #include <algorithm>
 
 #include "probecomp/cad/locator.hpp"
+#include "probecomp/geometry/point_set.hpp"
 #include "probecomp/geometry/statistics.hpp"
 
 namespace probecomp::cad {
+
+namespace {
+// Above 4 × this many points a spread subset of about this many votes first (see decide_material_side)...
+constexpr std::size_t kVoteSubset = 1 << 16;
+// ... and decides a face that holds at least this many of its votes, this share of them for one side. A face with
+// fewer (a small face, or one no point is nearest to) is decided by all the points, as without the subset.
+constexpr int kDecisiveVotes = 1000;
+constexpr double kDecisiveShare = 0.9;
+}  // namespace
 
 const char* to_string(MaterialSource s) {
   switch (s) {
@@ -30,31 +40,49 @@ std::vector<MaterialSide> decide_material_side(Model& model, std::span<const Poi
   if (!any_unknown || raw_centres.empty()) return sides;
 
   const geometry::RigidTransform to_cad = initial.inverse();
-  std::vector<Point3> x(raw_centres.size());
-  for (std::size_t i = 0; i < x.size(); ++i) x[i] = to_cad * raw_centres[i];
-  std::vector<ModelPoint> feet;
-  {
-    const ModelLocator locator(model);
-    feet = locator.closest_points(x);
-  }
-  // Votes relative to the file's orientation (ModelPoint normals and distances use the current `outward`).
-  std::vector<int> plus(model.faces.size(), 0), minus(model.faces.size(), 0);
-  std::vector<std::vector<double>> distances(model.faces.size());
-  for (std::size_t i = 0; i < feet.size(); ++i) {
-    const ModelPoint& m = feet[i];
-    if (!m.ok() || m.on_trim_edge) continue;
-    const std::size_t f = static_cast<std::size_t>(m.face);
-    if (model.faces[f].material_known) continue;
-    double vote = 0.0;
-    if (approach_normals) {
-      vote = m.normal.dot(to_cad.linear() * (*approach_normals)[i]);
-    } else {
-      vote = m.distance;
-      distances[f].push_back(m.distance);
+  const ModelLocator locator(model);
+  // Votes relative to the file's orientation (ModelPoint normals and distances use the current `outward`), of the
+  // points at `indices` (all when empty).
+  std::vector<int> plus, minus;
+  std::vector<std::vector<double>> distances;
+  auto vote = [&](const std::vector<std::size_t>& indices) {
+    const std::size_t n = indices.empty() ? raw_centres.size() : indices.size();
+    auto at = [&](std::size_t i) { return indices.empty() ? i : indices[i]; };
+    std::vector<Point3> x(n);
+    for (std::size_t i = 0; i < n; ++i) x[i] = to_cad * raw_centres[at(i)];
+    const std::vector<ModelPoint> feet = locator.closest_points(x);
+    plus.assign(model.faces.size(), 0);
+    minus.assign(model.faces.size(), 0);
+    distances.assign(model.faces.size(), {});
+    for (std::size_t i = 0; i < n; ++i) {
+      const ModelPoint& m = feet[i];
+      if (!m.ok() || m.on_trim_edge) continue;
+      const std::size_t f = static_cast<std::size_t>(m.face);
+      if (model.faces[f].material_known) continue;
+      double v = 0.0;
+      if (approach_normals) {
+        v = m.normal.dot(to_cad.linear() * (*approach_normals)[at(i)]);
+      } else {
+        v = m.distance;
+        distances[f].push_back(m.distance);
+      }
+      if (v > 0.0) ++plus[f];
+      if (v < 0.0) ++minus[f];
     }
-    if (vote > 0.0) ++plus[f];
-    if (vote < 0.0) ++minus[f];
+  };
+  // Many points: a spread subset votes first, a closest-point search for each of its points instead of a million.
+  // It decides when every undecided face holds enough of its votes and a clear majority; else all points vote.
+  bool decided = false;
+  if (raw_centres.size() > 4 * kVoteSubset) {
+    vote(geometry::spread_subset_indices(raw_centres, kVoteSubset));
+    decided = true;
+    for (std::size_t f = 0; f < model.faces.size(); ++f) {
+      if (model.faces[f].material_known) continue;
+      const int votes = plus[f] + minus[f];
+      if (votes < kDecisiveVotes || std::max(plus[f], minus[f]) < kDecisiveShare * votes) decided = false;
+    }
   }
+  if (!decided) vote({});
   for (std::size_t f = 0; f < model.faces.size(); ++f) {
     Face& face = model.faces[f];
     if (face.material_known) continue;

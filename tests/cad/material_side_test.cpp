@@ -41,5 +41,38 @@ TEST(MaterialSide, FromTheDataAndFromTheApproachNormals) {
   EXPECT_EQ(solid.faces[0].outward, +1);
 }
 
+TEST(MaterialSide, ManyPointsVoteByASubsetUnlessAFaceHasTooFewVotesThere) {
+  // 360 000 points on one face: a spread subset decides it. With a second face far away and only 400 points on it
+  // (about 70 in the subset), all points vote, as without the subset.
+  const nurbs::Surface s = testing::random_rational_surface(22, {.nu = 8, .nv = 8, .height = 6.0});
+  const Probed big = probe(kMisalignment, s, 1.0, -1, 600);
+  Eigen::Isometry3d away = Eigen::Isometry3d::Identity();
+  away.translation() = Vector3(0, 0, 200);
+  const nurbs::Surface t = nurbs::transformed(s, away);
+  const Probed small = probe(kMisalignment, t, 1.0, +1, 20);
+  for (bool with_small : {false, true}) {
+    cad::Model m = single_face_model(s, +1, false);
+    std::vector<Point3> centres = big.centres;
+    if (with_small) {
+      m.faces.push_back(m.faces[0]);
+      m.faces[1].index = 1;
+      m.faces[1].surface = t;
+      centres.insert(centres.end(), small.centres.begin(), small.centres.end());
+    }
+    const std::vector<MaterialSide> sides = decide_material_side(m, centres, std::nullopt, geometry::RigidTransform::Identity());
+    EXPECT_EQ(sides[0].outward, -1);
+    EXPECT_EQ(sides[0].source, MaterialSource::Data);
+    EXPECT_GT(sides[0].agreeing, 0.99 * sides[0].points);
+    if (!with_small) {
+      EXPECT_LE(sides[0].points, 72000);  // the subset's votes: every 5th point
+      continue;
+    }
+    EXPECT_EQ(sides[0].points + sides[1].points, static_cast<int>(centres.size()));  // every point voted
+    EXPECT_EQ(sides[1].points, 400);
+    EXPECT_EQ(sides[1].outward, +1);
+    EXPECT_EQ(sides[1].source, MaterialSource::Data);
+  }
+}
+
 }  // namespace
 }  // namespace probecomp::cad

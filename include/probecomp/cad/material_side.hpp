@@ -25,7 +25,7 @@ enum class MaterialSource {
 struct MaterialSide {
   int outward = 1;  // as Face::outward
   MaterialSource source = MaterialSource::NoPoints;
-  int points = 0;         // points whose nearest face this is
+  int points = 0;         // points whose nearest face this is (of a spread subset, when the subset decided)
   int agreeing = 0;       // of those, how many vote for the chosen side
   double median_distance = 0.0;  // median signed distance of the raw centres, on the chosen side (mm; Data)
 };
