@@ -21,6 +21,7 @@ check "[ \$(wc -l <'$W/out.csv') -eq \$(wc -l <'$W/raw_id.csv') ]" "one output r
 check "head -1 '$W/out.csv' | grep -q '^x,y,z,nx,ny,nz,deviation,u,face,status,id$'" "output header"
 check "tail -1 '$W/out.csv' | grep -q ',ok,7200$'" "last row carries its id"
 for key in '"transform"' '"registration": {"converged": true, "status": "converged", "stop_reason": "' \
+           '"iterations": [1-9][0-9]*, "searches": [1-9][0-9]*, "scale"' \
            '"control_points"' '"noise_estimate"' '"counts"' '"deviation": {"points": 7200' \
            '"timings": {"read": [0-9.]*, "prepare": [0-9.]*, "register": [0-9.]*, "fit": [0-9.]*, "compensate": [0-9.]*, "write": [0-9.]*, "total": [0-9.]*}'; do
   check "grep -q '$key' '$W/stats.json'" "stats has $key"
