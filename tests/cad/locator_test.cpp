@@ -155,27 +155,39 @@ TEST(ModelLocator, SameResultWithOneAndTwoThreads) {
   }
 }
 
-TEST(ModelLocator, AHintFromANearbyQueryGivesTheSameAnswer) {
-  // As in ICP: each point's foot before a small motion is the hint for its foot after it. The hinted search
-  // is exact, so it must agree with the unhinted one: same distance, and the same point where it is unique.
-  const Model model = read_model(kCadDir / "gismo_hammer.iges");
-  const ModelLocator locator(model);
-  const std::vector<Point3> before = points_around(model, 3000, 8);
-  std::vector<Point3> after;
-  std::mt19937_64 rng(9);
-  std::uniform_real_distribution<double> step(-0.3, 0.3);
-  for (const Point3& p : before) after.push_back(p + Vector3(step(rng), step(rng), step(rng)));
-  const std::vector<ModelPoint> hints = locator.closest_points(before);
-  const std::vector<ModelPoint> plain = locator.closest_points(after);
-  const std::vector<ModelPoint> hinted = locator.closest_points(after, hints);
+// Queries near the model and each moved by up to `step` mm per coordinate: ICP's points before and after an update.
+struct MovedQueries {
+  std::vector<Point3> before, after;
+};
+MovedQueries moved_queries(const Model& model, std::uint64_t seed, double step) {
+  MovedQueries q{points_around(model, 3000, seed), {}};
+  std::mt19937_64 rng(seed + 1);
+  std::uniform_real_distribution<double> d(-step, step);
+  for (const Point3& p : q.before) q.after.push_back(p + Vector3(d(rng), d(rng), d(rng)));
+  return q;
+}
+
+// The same distance as the unhinted search everywhere, and the same face but for ties at an edge.
+void expect_same_answers(const std::vector<ModelPoint>& plain, const std::vector<ModelPoint>& hinted) {
+  ASSERT_EQ(plain.size(), hinted.size());
   int same_face = 0;
-  for (std::size_t k = 0; k < after.size(); ++k) {
+  for (std::size_t k = 0; k < plain.size(); ++k) {
     ASSERT_EQ(plain[k].ok(), hinted[k].ok()) << k;
     if (!plain[k].ok()) continue;
     EXPECT_NEAR(std::abs(hinted[k].distance), std::abs(plain[k].distance), 1e-9) << k;
     same_face += hinted[k].face == plain[k].face;
   }
-  EXPECT_GT(same_face, 0.99 * static_cast<double>(after.size()));  // ties between faces at an edge may differ
+  EXPECT_GT(same_face, 0.99 * static_cast<double>(plain.size()));
+}
+
+TEST(ModelLocator, AHintFromANearbyQueryGivesTheSameAnswer) {
+  // As in ICP: each point's foot before a small motion is the hint for its foot after it. The hinted search
+  // is exact, so it must agree with the unhinted one: same distance, and the same point where it is unique.
+  const Model model = read_model(kCadDir / "gismo_hammer.iges");
+  const ModelLocator locator(model);
+  const MovedQueries q = moved_queries(model, 8, 0.3);
+  const std::vector<ModelPoint> hints = locator.closest_points(q.before);
+  expect_same_answers(locator.closest_points(q.after), locator.closest_points(q.after, hints));
 }
 
 TEST(ModelLocator, FeetUpdatedInPlaceEqualTheUnhintedSearch) {
@@ -183,24 +195,12 @@ TEST(ModelLocator, FeetUpdatedInPlaceEqualTheUnhintedSearch) {
   // cell is not searched again (ClosestPointSolver's `known`), so the answer must still be the unhinted search's.
   const Model model = read_model(kCadDir / "gismo_hammer.iges");
   const ModelLocator locator(model);
-  const std::vector<Point3> before = points_around(model, 3000, 11);
-  std::vector<Point3> after;
-  std::mt19937_64 rng(12);
-  std::uniform_real_distribution<double> step(-0.05, 0.05);
-  for (const Point3& p : before) after.push_back(p + Vector3(step(rng), step(rng), step(rng)));
-  std::vector<ModelPoint> feet = locator.closest_points(before);
-  const std::vector<ModelPoint> plain = locator.closest_points(after);
-  locator.update_closest_points(after, feet, ModelLocator::HintedSearch::Exact);
-  int same_face = 0;
-  for (std::size_t k = 0; k < after.size(); ++k) {
-    ASSERT_EQ(plain[k].ok(), feet[k].ok()) << k;
-    if (!plain[k].ok()) continue;
-    EXPECT_NEAR(std::abs(feet[k].distance), std::abs(plain[k].distance), 1e-9) << k;
-    same_face += feet[k].face == plain[k].face;
-  }
-  EXPECT_GT(same_face, 0.99 * static_cast<double>(after.size()));
-  std::vector<ModelPoint> wrong(after.size() - 1);
-  EXPECT_THROW(locator.update_closest_points(after, wrong), std::invalid_argument);
+  const MovedQueries q = moved_queries(model, 11, 0.05);
+  std::vector<ModelPoint> feet = locator.closest_points(q.before);
+  locator.update_closest_points(q.after, feet, ModelLocator::HintedSearch::Exact);
+  expect_same_answers(locator.closest_points(q.after), feet);
+  std::vector<ModelPoint> wrong(q.after.size() - 1);
+  EXPECT_THROW(locator.update_closest_points(q.after, wrong), std::invalid_argument);
 }
 
 TEST(ModelLocator, SignedDistanceIsPositiveOutsideASolid) {
