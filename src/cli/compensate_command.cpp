@@ -87,6 +87,7 @@ Loaded load(const std::string& cad_path, const std::string& points_path, std::op
   std::optional<io::LengthUnit> declared;
   if (!units.empty()) declared = io::length_unit(units);
   l.table = io::read_points(points_path, declared);
+  l.table.drop_number_text();
   std::optional<double> default_mm;
   if (r) default_mm = *r * l.table.unit.mm;
   l.radii = tip_radii(l.table, default_mm, points_path);

@@ -62,6 +62,26 @@ void Fields::shrink_to_fit() {
   field_end_.shrink_to_fit();
 }
 
+Fields Fields::keeping(const std::vector<int>& columns) const {
+  Fields out;
+  std::vector<std::string> row;
+  for (std::size_t k = 0; k < size(); ++k) {
+    const Row in = (*this)[k];
+    row.assign(in.size(), std::string());
+    for (int c : columns) {
+      if (c >= 0 && static_cast<std::size_t>(c) < in.size()) row[static_cast<std::size_t>(c)] = in[static_cast<std::size_t>(c)];
+    }
+    out.push_back(row);
+  }
+  out.shrink_to_fit();
+  return out;
+}
+
+void PointTable::drop_number_text() {
+  if (unit.mm != 1.0) return;
+  rows = rows.keeping(carried_columns());
+}
+
 std::string PointTable::carried_header(const std::vector<std::string>& ours) const {
   std::string out;
   for (int c : carried_columns()) {

@@ -102,6 +102,30 @@ TEST(PointsCsv, EveryRowWithItsNumbersAsReadAndTheCarriedColumns) {
   EXPECT_EQ(points_csv(t), "x,y,z,i,j,k,r,id\n1.5,0,0.001,0,0,2,,a;b\n2,3,4,1,0,0,0.25,7\n");
 }
 
+TEST(PointTable, DroppingTheNumbersTextKeepsTheCarriedFieldsAndLosesNoValueInMillimetres) {
+  PointTable t = read_text("x,y,z,i,j,k,r,id,note\n0.1,-2.5e-3,7,0,0,3,1.5,A7,\"left, top\"\n1e2,2,3,1,0,0,0.25,,x\n");
+  const std::vector<double> x = {t.points[0].x(), t.points[0].y(), t.points[1].x()};
+  t.drop_number_text();
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_EQ(t.rows[0][0], "");
+  EXPECT_EQ(t.rows[0][6], "");
+  EXPECT_EQ(t.rows[0][7], "A7");
+  EXPECT_EQ(t.rows[0][8], "left, top");
+  EXPECT_EQ(t.rows[1][7], "");
+  EXPECT_EQ(t.rows[1][8], "x");
+  // An output asks row_value for a number and falls back to the table's own double, which is the file's: 0.1 is
+  // the double "0.1" reads as.
+  EXPECT_EQ(row_value(t, 0, 0, t.points[0].x()), 0.1);
+  EXPECT_EQ(row_value(t, 1, 0, t.points[0].y()), -2.5e-3);
+  EXPECT_EQ(x[2], 100.0);
+  EXPECT_EQ((*t.radii)[0], 1.5);
+  EXPECT_EQ(t.carried_fields(0), ",A7,\"left, top\"");
+  // In inches the text is the exact value: kept.
+  PointTable inch = read_text("x,y,z,id\n0.1,2,3,A\n", kInch);
+  inch.drop_number_text();
+  EXPECT_EQ(inch.rows[0][0], "0.1");
+}
+
 TEST(Fields, RowsOfAnyLengthComeBackAsWritten) {
   Fields f;
   EXPECT_TRUE(f.empty());

@@ -52,6 +52,8 @@ class Fields {
   // Room for this much text (a file's size bounds its fields' text), and no spare room once all rows are in.
   void reserve_text(std::size_t bytes) { text_.reserve(bytes); }
   void shrink_to_fit();
+  // The same rows with only the fields of `columns` (sorted) kept, every other field empty.
+  [[nodiscard]] Fields keeping(const std::vector<int>& columns) const;
   [[nodiscard]] Row operator[](std::size_t k) const { return {this, k, row_first_[k + 1] - row_first_[k]}; }
   [[nodiscard]] std::size_t size() const { return row_first_.size() - 1; }
   [[nodiscard]] bool empty() const { return size() == 0; }
@@ -90,6 +92,10 @@ struct PointTable {
   // each quoted where it needs to be (io/text.hpp csv_field).
   [[nodiscard]] std::string carried_header(const std::vector<std::string>& ours) const;
   [[nodiscard]] std::string carried_fields(std::size_t k) const;
+  // Frees the text of the numbers (x, y, z, i, j, k, r), keeping the carried columns', where that loses nothing an
+  // output of compensated points needs: in mm, `points` and `radii` hold the very doubles the text gave (a million
+  // rows: 85 MB less). Does nothing in another unit, where the text is the exact value in the file's unit.
+  void drop_number_text();
 };
 
 // CSV as other software writes it: a UTF-8 byte-order mark, CRLF line ends, ',' ';' or tab between fields (the
