@@ -445,12 +445,22 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
   // Points by face (their correspondences); edge and double-contact points count in their face's report but are
   // never fitted.
   std::map<int, FaceFit> by_face;
+  auto member = [&](std::size_t k) {
+    const registration::PointMatch& m = registration.matches[k];
+    return m.ok() && raw[k].allFinite() && !m.on_edge && out.second_contact[k] < 0;
+  };
+  // Counted first, so that each face's member list is allocated once, at its size.
+  std::map<int, std::size_t> members;
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    if (member(k)) ++members[registration.matches[k].face];
+  }
+  for (const auto& [f, count] : members) by_face[f].members.reserve(count);
   for (std::size_t k = 0; k < raw.size(); ++k) {
     const registration::PointMatch& m = registration.matches[k];
     if (!m.ok() || !raw[k].allFinite()) continue;
     FaceFit& ff = by_face[m.face];
     ++ff.report.points;
-    if (!m.on_edge && out.second_contact[k] < 0) ff.members.push_back(k);
+    if (member(k)) ff.members.push_back(k);
   }
 
   std::size_t done = 0;
@@ -484,6 +494,9 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     std::vector<Point3> pts;
     std::vector<std::size_t> fitted_point;  // fitted point → its input index
     std::vector<fitting::SurfaceParameter> params;
+    pts.reserve(members.size());
+    fitted_point.reserve(members.size());
+    params.reserve(members.size());
     for (std::size_t i = 0; i < members.size(); ++i) {
       if (first[i] != i) {
         position[i] = position[first[i]];
@@ -495,6 +508,8 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       fitted_point.push_back(members[i]);
       params.push_back({registration.matches[members[i]].u, registration.matches[members[i]].v});
     }
+    // Not needed past here: freed before the fit, whose own arrays take the room (a million points: 28 MB).
+    member_points = {};
     const double needed = options.min_points_per_control_point * start.num_u() * start.num_v();
     std::optional<fitting::AdaptiveFitResult>& fit = ff.fit;
     std::vector<double> weights(pts.size(), 1.0);

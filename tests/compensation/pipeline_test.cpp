@@ -5,6 +5,7 @@
 #include "probecomp/compensation/pipeline.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <random>
@@ -186,6 +187,33 @@ TEST(Pipeline, TheStepsComposeToCompensate) {
   EXPECT_NEAR(st.deviation_std, std::sqrt(ss / ok), 1e-12);
   EXPECT_EQ(st.deviation_min, lo);
   EXPECT_EQ(st.deviation_max, hi);
+}
+
+TEST(Pipeline, SameResultWithOneAndTwoThreads) {
+  // Every parallel step sums or searches in an order fixed by the data, not by the threads: the same bits.
+  const studies::FreeformStudyResult study = studies::run_freeform_study();
+  std::vector<Point3> raw;
+  for (const simulation::Touch& t : study.touches) raw.push_back(t.measured);
+  compensation::CompensateOptions o;
+  o.probe_radius = study.freeform.probe_radius;
+  std::vector<compensation::CompensationResult> results;
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    results.push_back(compensation::compensate(study.freeform.nominal, raw, std::nullopt, o));
+  }
+  const compensation::CompensationResult& one = results[0];
+  const compensation::CompensationResult& two = results[1];
+  EXPECT_EQ(one.registration.transform.matrix(), two.registration.transform.matrix());
+  EXPECT_EQ(one.registration.iterations, two.registration.iterations);
+  EXPECT_EQ(one.registration.searches, two.registration.searches);
+  ASSERT_EQ(one.points.size(), two.points.size());
+  for (std::size_t k = 0; k < one.points.size(); ++k) {
+    ASSERT_EQ(one.points[k].status, two.points[k].status) << k;
+    ASSERT_EQ(one.points[k].contact, two.points[k].contact) << k;
+    ASSERT_EQ(one.points[k].normal, two.points[k].normal) << k;
+    ASSERT_EQ(one.points[k].deviation, two.points[k].deviation) << k;
+    ASSERT_EQ(one.points[k].uncertainty, two.points[k].uncertainty) << k;
+  }
 }
 
 TEST(Pipeline, RegistrationThatCannotRunIsARegistrationError) {
