@@ -450,11 +450,11 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     return m.ok() && raw[k].allFinite() && !m.on_edge && out.second_contact[k] < 0;
   };
   // Counted first, so that each face's member list is allocated once, at its size.
-  std::map<int, std::size_t> members;
+  std::map<int, std::size_t> member_count;
   for (std::size_t k = 0; k < raw.size(); ++k) {
-    if (member(k)) ++members[registration.matches[k].face];
+    if (member(k)) ++member_count[registration.matches[k].face];
   }
-  for (const auto& [f, count] : members) by_face[f].members.reserve(count);
+  for (const auto& [f, count] : member_count) by_face[f].members.reserve(count);
   for (std::size_t k = 0; k < raw.size(); ++k) {
     const registration::PointMatch& m = registration.matches[k];
     if (!m.ok() || !raw[k].allFinite()) continue;

@@ -36,6 +36,32 @@ void expect_freeform_bars(const studies::FreeformStudyResult& r) {
               conv.std, conv.max_abs());
 }
 
+// The built-in free-form study's touches as raw centres, and the options that compensate them.
+struct StudyRun {
+  studies::FreeformStudyResult study;
+  std::vector<Point3> raw;
+  compensation::CompensateOptions options;
+};
+StudyRun freeform_run() {
+  StudyRun r{studies::run_freeform_study(), {}, {}};
+  for (const simulation::Touch& t : r.study.touches) r.raw.push_back(t.measured);
+  r.options.probe_radius = r.study.freeform.probe_radius;
+  return r;
+}
+
+// The same points, bit for bit: status, contact, normal, deviation and u.
+void expect_same_points(const std::vector<compensation::CompensatedPoint>& a,
+                        const std::vector<compensation::CompensatedPoint>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    ASSERT_EQ(a[k].status, b[k].status) << k;
+    ASSERT_EQ(a[k].contact, b[k].contact) << k;
+    ASSERT_EQ(a[k].normal, b[k].normal) << k;
+    ASSERT_EQ(a[k].deviation, b[k].deviation) << k;
+    ASSERT_EQ(a[k].uncertainty, b[k].uncertainty) << k;
+  }
+}
+
 TEST(Pipeline, FreeformCaseOnTheGridMeetsTheBars) { expect_freeform_bars(studies::run_freeform_study()); }
 
 TEST(Pipeline, FreeformCaseWithAnotherNoiseDrawMeetsTheBars) {
@@ -136,24 +162,17 @@ TEST(Pipeline, TipRadiiThatAreNotPositiveOrDoNotMatchThePointsAreRefused) {
 // compensate() is the composition of the named steps: called one by one they give the same points, and the
 // statistics and face reports say what the points say.
 TEST(Pipeline, TheStepsComposeToCompensate) {
-  const studies::FreeformStudyResult study = studies::run_freeform_study();
-  std::vector<Point3> raw;
-  for (const simulation::Touch& t : study.touches) raw.push_back(t.measured);
-  compensation::CompensateOptions o;
-  o.probe_radius = study.freeform.probe_radius;
+  const StudyRun run = freeform_run();
+  const studies::FreeformStudyResult& study = run.study;
+  const std::vector<Point3>& raw = run.raw;
+  const compensation::CompensateOptions& o = run.options;
   const compensation::CompensationResult whole = compensation::compensate(study.freeform.nominal, raw, std::nullopt, o);
 
   const compensation::PreparedModel prepared =
       compensation::prepare_model(study.freeform.nominal, o.probe_radius, raw, std::nullopt);
   const registration::RegistrationResult reg = compensation::register_centres(prepared, raw);
   const compensation::FitResult fits = compensation::fit_faces(prepared, raw, reg);
-  const std::vector<compensation::CompensatedPoint> points = compensation::compensate_points(prepared, raw, reg, fits);
-  ASSERT_EQ(points.size(), whole.points.size());
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    ASSERT_EQ(points[k].status, whole.points[k].status) << k;
-    ASSERT_EQ(points[k].contact, whole.points[k].contact) << k;
-    ASSERT_EQ(points[k].deviation, whole.points[k].deviation) << k;
-  }
+  expect_same_points(compensation::compensate_points(prepared, raw, reg, fits), whole.points);
   ASSERT_EQ(fits.faces.size(), 1u);
   const compensation::FaceReport& face = fits.faces[0].report;
   EXPECT_TRUE(face.fitted) << face.stop_reason;
@@ -191,29 +210,18 @@ TEST(Pipeline, TheStepsComposeToCompensate) {
 
 TEST(Pipeline, SameResultWithOneAndTwoThreads) {
   // Every parallel step sums or searches in an order fixed by the data, not by the threads: the same bits.
-  const studies::FreeformStudyResult study = studies::run_freeform_study();
-  std::vector<Point3> raw;
-  for (const simulation::Touch& t : study.touches) raw.push_back(t.measured);
-  compensation::CompensateOptions o;
-  o.probe_radius = study.freeform.probe_radius;
+  const StudyRun run = freeform_run();
   std::vector<compensation::CompensationResult> results;
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-    results.push_back(compensation::compensate(study.freeform.nominal, raw, std::nullopt, o));
+    results.push_back(compensation::compensate(run.study.freeform.nominal, run.raw, std::nullopt, run.options));
   }
   const compensation::CompensationResult& one = results[0];
   const compensation::CompensationResult& two = results[1];
   EXPECT_EQ(one.registration.transform.matrix(), two.registration.transform.matrix());
   EXPECT_EQ(one.registration.iterations, two.registration.iterations);
   EXPECT_EQ(one.registration.searches, two.registration.searches);
-  ASSERT_EQ(one.points.size(), two.points.size());
-  for (std::size_t k = 0; k < one.points.size(); ++k) {
-    ASSERT_EQ(one.points[k].status, two.points[k].status) << k;
-    ASSERT_EQ(one.points[k].contact, two.points[k].contact) << k;
-    ASSERT_EQ(one.points[k].normal, two.points[k].normal) << k;
-    ASSERT_EQ(one.points[k].deviation, two.points[k].deviation) << k;
-    ASSERT_EQ(one.points[k].uncertainty, two.points[k].uncertainty) << k;
-  }
+  expect_same_points(one.points, two.points);
 }
 
 TEST(Pipeline, RegistrationThatCannotRunIsARegistrationError) {

@@ -20,17 +20,18 @@ inline std::string exact(double v) {
   return std::string(buf, ec == std::errc() ? end : buf);
 }
 // `precision` decimals, correctly rounded as printf's %.Nf (std::to_chars is specified to give printf's text, and
-// is several times faster: a million-row output writes 7 million of these).
-inline std::string fixed(double v, int precision) {
+// is several times faster: a million-row output writes 7 million of these), appended to `out`: writers of many rows
+// need no string per number.
+inline std::string& append_fixed(std::string& out, double v, int precision) {
   char buf[400];  // |v| up to 1.8e308 written out in full, and the decimals
   const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v + 0.0, std::chars_format::fixed, precision);
-  return ec == std::errc() ? std::string(buf, end) : fmt("%f", v);
-}
-// The same, appended to `out` (no string of its own): for writers of many rows.
-inline std::string& append_fixed(std::string& out, double v, int precision) {
-  char buf[400];
-  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v + 0.0, std::chars_format::fixed, precision);
   return ec == std::errc() ? out.append(buf, end) : out.append(fmt("%f", v));
+}
+// The same as a string of its own.
+inline std::string fixed(double v, int precision) {
+  std::string out;
+  append_fixed(out, v, precision);
+  return out;
 }
 inline std::string mm(double v) { return fixed(v, 9); }
 inline std::string unit(double v) { return fixed(v, 12); }

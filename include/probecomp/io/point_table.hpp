@@ -52,7 +52,7 @@ class Fields {
   // Room for this much text (a file's size bounds its fields' text), and no spare room once all rows are in.
   void reserve_text(std::size_t bytes) { text_.reserve(bytes); }
   void shrink_to_fit();
-  // The same rows with only the fields of `columns` (sorted) kept, every other field empty.
+  // The same rows with only the fields of `columns` kept, every other field empty.
   [[nodiscard]] Fields keeping(const std::vector<int>& columns) const;
   [[nodiscard]] Row operator[](std::size_t k) const { return {this, k, row_first_[k + 1] - row_first_[k]}; }
   [[nodiscard]] std::size_t size() const { return row_first_.size() - 1; }
