@@ -15,8 +15,9 @@ namespace {
 // arc's length by well under 1 %.
 constexpr int kLengthSamples = 64;
 constexpr int kIsoCurves = 5;
-// A face may not receive more than this many points (a tiny spacing on a large face is a mistake).
-constexpr long kMaxPointsPerFace = 4'000'000;
+// A face may not receive more than this many points (a tiny spacing on a large face is a mistake). Twice the
+// 10 M points of a dense scan of one panel, the largest case compensate is measured on (README, Performance).
+constexpr long kMaxPointsPerFace = 20'000'000;
 
 double longest_iso_length(const nurbs::Surface& s, const nurbs::Domain& d, bool along_u) {
   double longest = 0.0;

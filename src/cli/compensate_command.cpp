@@ -18,6 +18,7 @@
 #include "probecomp/io/report.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/io/qif.hpp"
+#include "probecomp/io/progress.hpp"
 #include "probecomp/io/results.hpp"
 #include "probecomp/io/text.hpp"
 #include "probecomp/io/transform_file.hpp"
@@ -30,15 +31,10 @@ namespace {
 using io::fmt;
 using geometry::Stopwatch;
 
-// Step and percentage on standard error, once a run has lasted a second (short runs stay silent).
-struct Progress {
-  Stopwatch clock;
-  bool quiet = false;
-  void operator()(const std::string& stage, double fraction) const {
-    if (quiet || clock.seconds() < 1.0) return;
-    std::cerr << "probecomp: [" << fmt("%3.0f", 100.0 * fraction) << "%] " << stage << "\n";
-  }
-};
+// The whole command's share of time in reading the points and in writing the results (at 10 M points: read 8.8 s,
+// compensation 49 s, write 8.3 s), for the progress bar's time left.
+constexpr double kReadShare = 0.13;
+constexpr double kWriteShare = 0.12;
 
 bool has_extension(const std::string& path, std::initializer_list<const char*> extensions) {
   const std::string e = io::lower(std::filesystem::path(path).extension().string());
@@ -80,13 +76,14 @@ std::vector<double> tip_radii(const io::PointTable& t, std::optional<double> def
 // The load step: the points (in their unit: --units, a DMIS UNITS statement, else mm) and the CAD model. The
 // probe radius is in the points' unit, as a measurement program in inches states its styli.
 Loaded load(const std::string& cad_path, const std::string& points_path, std::optional<double> r,
-            const std::string& units, const std::string& initial_transform) {
+            const std::string& units, const std::string& initial_transform, io::ProgressBar& bar) {
   if (r) check_probe_radius(*r);
   Loaded l;
   if (!initial_transform.empty()) l.initial = io::read_transform(initial_transform);
   std::optional<io::LengthUnit> declared;
   if (!units.empty()) declared = io::length_unit(units);
-  l.table = io::read_points(points_path, declared);
+  l.table = io::read_points(points_path, declared, [&](double f) { bar.update("reading", kReadShare * f); });
+  bar.set_points(l.table.points.size());
   l.table.drop_number_text();
   std::optional<double> default_mm;
   if (r) default_mm = *r * l.table.unit.mm;
@@ -103,25 +100,30 @@ Loaded load(const std::string& cad_path, const std::string& points_path, std::op
 }
 
 compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Method method, bool accept_doubtful,
-                                              bool quiet) {
+                                              io::ProgressBar& bar) {
   compensation::CompensateOptions o;
   o.method = method;
   o.accept_doubtful_registration = accept_doubtful;
   o.probe_radius = l.inputs.tip_radii.front();
   o.probe_radii = l.radii;
   o.registration.initial = l.initial;
-  o.progress = Progress{Stopwatch(), quiet};
+  o.progress = [&bar](const std::string& stage, double f) {
+    if (stage == "done") return;  // for the command, writing comes next
+    bar.update(stage, kReadShare + (1.0 - kReadShare - kWriteShare) * f);
+  };
   std::optional<std::span<const Vector3>> normals;
   if (l.table.normals) normals = std::span<const Vector3>(*l.table.normals);
   compensation::CompensationResult result = compensation::compensate(l.model, l.table.points, normals, o);
   // Warnings go out even with --quiet: they change how the numbers are read.
-  for (const std::string& w : result.warnings) std::cerr << "probecomp: warning: " << w << "\n";
+  for (const std::string& w : result.warnings) bar.print("probecomp: warning: " + w);
   return result;
 }
 
 // The write step: the points (CSV, DMIS or QIF, by the extension), the report and the statistics, all or none
 // (standard output last, once every file is in place).
-void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation::CompensationResult& r) {
+void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation::CompensationResult& r,
+                   io::ProgressBar& bar) {
+  bar.update("writing", 1.0 - kWriteShare);
   const Stopwatch clock;
   // CSV, the usual output of a scan, goes to its file block by block; DMIS and QIF are built whole.
   const bool qif = io::is_qif(a.output), dmis = !a.output.empty() && io::is_dmis(a.output);
@@ -134,7 +136,7 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
   if (!a.output.empty() && !qif && !dmis) {
     files.add(a.output, [&](const std::filesystem::path& temporary) {
       std::ofstream out(temporary, std::ios::binary);
-      io::write_compensated_csv(out, l.table, r);
+      io::write_compensated_csv(out, l.table, r, [&](double f) { bar.update("writing", 1.0 - kWriteShare * (1.0 - f)); });
       out.flush();
       if (!out) throw InputError(a.output + ": cannot be written");
     });
@@ -154,6 +156,7 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
   if (!a.json.empty()) files.add(a.json, io::statistics_json(r, l.inputs, timings, tolerance));
   files.commit();
   if (a.output.empty()) io::write_compensated_csv(std::cout, l.table, r);
+  bar.update("done", 1.0);
 }
 
 void print_summary_row(std::ostream& out, const char* name, const studies::ErrorSummary& s) {
@@ -168,10 +171,11 @@ int run_compensate(const CompensateArgs& a) {
   io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}, {"--report", a.report}},
                                  {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform}});
   if (!a.tolerance.empty()) (void)io::parse_tolerance(a.tolerance);  // a bad band fails before the run
-  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform);
+  io::ProgressBar bar(a.quiet);
+  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform, bar);
   const compensation::Method method = a.method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
-  const compensation::CompensationResult r = run_pipeline(l, method, a.accept_doubtful_registration, a.quiet);
-  write_outputs(a, l, r);
+  const compensation::CompensationResult r = run_pipeline(l, method, a.accept_doubtful_registration, bar);
+  write_outputs(a, l, r, bar);
   return 0;
 }
 
@@ -181,8 +185,9 @@ int run_fit(const FitArgs& a) {
   }
   io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}},
                                  {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform}});
-  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform);
-  const compensation::CompensationResult r = run_pipeline(l, compensation::Method::Cad, a.accept_doubtful_registration, a.quiet);
+  io::ProgressBar bar(a.quiet);
+  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform, bar);
+  const compensation::CompensationResult r = run_pipeline(l, compensation::Method::Cad, a.accept_doubtful_registration, bar);
   const std::vector<nurbs::Surface> surfaces = compensation::fitted_part_surfaces(r);
   if (surfaces.empty()) {
     throw FitError("no face holds enough points for a fit, so there is no measured surface to write");

@@ -206,10 +206,11 @@ bool is_dmis(const std::filesystem::path& path) {
   return e == ".DMO" || e == ".DMI" || e == ".DMS";
 }
 
-PointTable read_points(const std::filesystem::path& path, std::optional<LengthUnit> declared) {
+PointTable read_points(const std::filesystem::path& path, std::optional<LengthUnit> declared,
+                       const FileProgress& progress) {
   if (is_dmis(path)) return read_point_dmis(path, declared);
   if (is_qif(path)) return read_point_qif(path, declared);
-  return read_point_csv(path, declared);
+  return read_point_csv(path, declared, progress);
 }
 
 PointTable read_point_dmis(const std::filesystem::path& path, std::optional<LengthUnit> declared) {

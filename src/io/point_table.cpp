@@ -97,7 +97,8 @@ std::string PointTable::carried_fields(std::size_t k) const {
   return out;
 }
 
-PointTable read_point_csv(const std::filesystem::path& path, std::optional<LengthUnit> declared) {
+PointTable read_point_csv(const std::filesystem::path& path, std::optional<LengthUnit> declared,
+                          const FileProgress& progress) {
   const std::string name = path.string();
   std::ifstream in(path);
   if (!in) throw InputError(name + ": cannot be opened (missing or unreadable)");
@@ -115,6 +116,9 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
   char separator = ',';
   while (std::getline(in, line)) {
     ++number;
+    if (progress && number % 65536 == 0 && !size_error && bytes > 0) {
+      progress(static_cast<double>(in.tellg()) / static_cast<double>(bytes));
+    }
     // A UTF-8 byte-order mark, as spreadsheet programs write, is not part of the first column's name.
     if (number == 1 && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);
     const std::string text = trim(line);  // and CRLF's CR

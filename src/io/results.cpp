@@ -73,7 +73,8 @@ DeviationSummaries summarise_deviations(const compensation::CompensationResult& 
   return out;
 }
 
-void write_compensated_csv(std::ostream& stream, const PointTable& t, const compensation::CompensationResult& r) {
+void write_compensated_csv(std::ostream& stream, const PointTable& t, const compensation::CompensationResult& r,
+                           const FileProgress& progress) {
   // The tip radius of each row when the input gave any (the default filled in where a row's was empty).
   const bool radius_column = t.radii.has_value();
   std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "u", "face", "status"};
@@ -107,6 +108,7 @@ void write_compensated_csv(std::ostream& stream, const PointTable& t, const comp
     if ((k + 1) % kBlockRows == 0) {
       stream.write(out.data(), static_cast<std::streamsize>(out.size()));
       out.clear();
+      if (progress) progress(static_cast<double>(k + 1) / static_cast<double>(r.points.size()));
     }
   }
   stream.write(out.data(), static_cast<std::streamsize>(out.size()));

@@ -30,8 +30,10 @@ namespace probecomp::io {
                                          std::optional<LengthUnit> declared = std::nullopt);
 
 // By extension: .dmo/.dmi/.dms (DMIS), .qif (io/qif.hpp) or anything else as CSV.
+// `progress` is heard while a CSV is read (the usual form of a long scan).
 [[nodiscard]] PointTable read_points(const std::filesystem::path& path,
-                                     std::optional<LengthUnit> declared = std::nullopt);
+                                     std::optional<LengthUnit> declared = std::nullopt,
+                                     const FileProgress& progress = {});
 [[nodiscard]] bool is_dmis(const std::filesystem::path& path);
 
 // One `FA(label)=FEAT/POINT,CART,x,y,z,i,j,k` statement: x in mm written in `unit` (9 decimals), the unit normal

@@ -4,6 +4,7 @@
 // that reads `# lengths in UNIT` states the file's length unit. Errors name the file and the line.
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -17,6 +18,9 @@
 #include "probecomp/io/units.hpp"
 
 namespace probecomp::io {
+
+// The share (0 to 1) of a file read or written so far, for a long run's progress bar (io/progress.hpp).
+using FileProgress = std::function<void(double fraction)>;
 
 // Every data row's fields as written (quotes removed), packed into one buffer: a row costs its text and one
 // offset a field, where a vector of strings cost about 450 bytes a row of seven numbers (1 M rows: 450 MB).
@@ -105,8 +109,10 @@ struct PointTable {
 // an error. A field read with a decimal comma is kept in the row with a decimal point. Throws InputError for a
 // missing file, a missing header or column, a malformed or non-finite number, a radius that is not positive, a
 // row with the wrong field count, an unclosed quote, an unknown unit in the comment, or no rows.
+// `progress`, when given, hears the share of the file's bytes read every 65 536 rows.
 [[nodiscard]] PointTable read_point_csv(const std::filesystem::path& path,
-                                       std::optional<LengthUnit> declared = std::nullopt);
+                                       std::optional<LengthUnit> declared = std::nullopt,
+                                       const FileProgress& progress = {});
 
 // The table as CSV (probecomp convert): `# lengths in UNIT` first when the unit is not mm, then x,y,z[,i,j,k][,r]
 // and the carried columns, every row, each number the shortest text that reads back as the row's value in the

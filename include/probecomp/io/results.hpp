@@ -17,8 +17,10 @@ namespace probecomp::io {
 // columns (renamed input_NAME where they clash with ours), lengths in the input's unit. A point that was not computed keeps its row: empty fields and the reason in
 // `status`.
 [[nodiscard]] std::string compensated_csv(const PointTable& input, const compensation::CompensationResult& result);
-// The same, written to `out` block by block (the whole text is never held: a million rows are 115 MB).
-void write_compensated_csv(std::ostream& out, const PointTable& input, const compensation::CompensationResult& result);
+// The same, written to `out` block by block (the whole text is never held: a million rows are 115 MB); `progress`
+// hears the share of rows written after each block.
+void write_compensated_csv(std::ostream& out, const PointTable& input, const compensation::CompensationResult& result,
+                           const FileProgress& progress = {});
 
 // One DMIS FA(label) point per computed point (labels from the input's label or id column, else P1, P2, ...),
 // with its deviation, face and status in a comment; a comment line for each point not computed. Lengths in the
