@@ -133,6 +133,8 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
     result.v = it.v;
     result.point = it.d.S;
     result.distance = std::sqrt(it.f);
+    result.Su = it.d.Su;
+    result.Sv = it.d.Sv;
     return result;
   };
 
@@ -159,9 +161,13 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
     const double predicted = (du * it.d.Su + dv * it.d.Sv).norm();
     if (predicted < kClosestPointStepTolerance && it.d.Suu.allFinite() && it.d.Suv.allFinite() && it.d.Svv.allFinite()) {
       // The last, tiny step is taken without the derivatives it would need only to start another: Newton's
-      // error after it is of the order of its square, and the point is evaluated where the step lands.
+      // error after it is of the order of its square. The point where the step lands is the Taylor polynomial of
+      // second order from the derivatives at hand: its error is of the third order in a step under 1e-8 mm (times
+      // the third derivatives' size: far below rounding), and it spares an evaluation.
       const double u1 = std::clamp(it.u + du, dom.u0, dom.u1), v1 = std::clamp(it.v + dv, dom.v0, dom.v1);
-      const Point3 S1 = evaluate(s, u1, v1, spans);
+      const double a = u1 - it.u, b = v1 - it.v;
+      const Point3 S1 = it.d.S + a * it.d.Su + b * it.d.Sv + (0.5 * a * a) * it.d.Suu + (a * b) * it.d.Suv +
+                        (0.5 * b * b) * it.d.Svv;
       const double dist1 = (S1 - P).norm();
       if (!(dist1 <= dist + kClosestPointStepTolerance)) return finish(converged_status);
       report_flatness();
@@ -170,6 +176,8 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
       result.v = v1;
       result.point = S1;
       result.distance = dist1;
+      result.Su = it.d.Su;
+      result.Sv = it.d.Sv;
       return result;
     }
     Iterate next = it;
