@@ -26,12 +26,16 @@ namespace {
 
 // A2.3 with the degree as a template parameter where it is known at compile time (P > 0): the loops unroll
 // and the tables fit the degree. P = 0 is the general case with the degree read at run time. The arithmetic
-// and its order are the same either way, so both give bit-identical results.
+// and its order are the same either way, so both give bit-identical results. Every division of A2.3 is by a knot
+// difference of the lower triangle: each is inverted once (p(p + 1)/2 divisions instead of about 26 for a cubic's
+// second derivatives) and multiplied by, which makes the closest-point Newton, which evaluates this twice a step,
+// markedly faster.
 template <int P>
 void derivatives_impl(const KnotVector& U, int span, double u, int n, double* ders) {
   const int p = P > 0 ? P : U.degree();
   constexpr int W = (P > 0 ? P : kMaxDegree) + 1;
   double ndu[W][W];  // ndu[j][r]: basis functions (upper triangle incl. diagonal) and knot differences
+  double inv[W][W];  // inv[j][r] = 1 / ndu[j][r] in the lower triangle (j > r)
   double a[2][W];
   double left[W];
   double right[W];
@@ -43,7 +47,8 @@ void derivatives_impl(const KnotVector& U, int span, double u, int n, double* de
     double saved = 0.0;
     for (int r = 0; r < j; ++r) {
       ndu[j][r] = right[r + 1] + left[j - r];  // lower triangle: knot differences
-      const double temp = ndu[r][j - 1] / ndu[j][r];
+      inv[j][r] = 1.0 / ndu[j][r];
+      const double temp = ndu[r][j - 1] * inv[j][r];
       ndu[r][j] = saved + right[r + 1] * temp;  // upper triangle: basis functions
       saved = left[j - r] * temp;
     }
@@ -61,17 +66,17 @@ void derivatives_impl(const KnotVector& U, int span, double u, int n, double* de
       const int rk = r - k;
       const int pk = p - k;
       if (r >= k) {
-        a[s2][0] = a[s1][0] / ndu[pk + 1][rk];
+        a[s2][0] = a[s1][0] * inv[pk + 1][rk];
         d = a[s2][0] * ndu[rk][pk];
       }
       const int j1 = (rk >= -1) ? 1 : -rk;
       const int j2 = (r - 1 <= pk) ? k - 1 : p - r;
       for (int j = j1; j <= j2; ++j) {
-        a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][rk + j];
+        a[s2][j] = (a[s1][j] - a[s1][j - 1]) * inv[pk + 1][rk + j];
         d += a[s2][j] * ndu[rk + j][pk];
       }
       if (r <= pk) {
-        a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
+        a[s2][k] = -a[s1][k - 1] * inv[pk + 1][r];
         d += a[s2][k] * ndu[r][pk];
       }
       ders[k * (p + 1) + r] = d;
