@@ -7,6 +7,8 @@
 #include <limits>
 #include <sstream>
 
+#include <tbb/parallel_for.h>
+
 #include "probecomp/io/format.hpp"
 #include "probecomp/io/text.hpp"
 
@@ -42,9 +44,9 @@ std::vector<int> PointTable::carried_columns() const {
   return out;
 }
 
-void Fields::push_back(const std::vector<std::string>& row) {
+void Fields::push_back(std::span<const std::string_view> row) {
   const std::size_t start = text_.size();
-  for (const std::string& f : row) {
+  for (const std::string_view f : row) {
     text_ += f;
     if (text_.size() - start > std::numeric_limits<std::uint32_t>::max()) {
       throw InputError("a row of more than 4 GB of text");
@@ -53,6 +55,19 @@ void Fields::push_back(const std::vector<std::string>& row) {
   }
   row_text_.push_back(text_.size());
   row_first_.push_back(field_end_.size());
+}
+
+void Fields::push_back(const std::vector<std::string>& row) {
+  std::vector<std::string_view> views(row.begin(), row.end());
+  push_back(views);
+}
+
+void Fields::append(const Fields& other) {
+  const std::uint64_t text_base = text_.size(), field_base = field_end_.size();
+  text_ += other.text_;
+  for (std::size_t k = 1; k < other.row_text_.size(); ++k) row_text_.push_back(text_base + other.row_text_[k]);
+  for (std::size_t k = 1; k < other.row_first_.size(); ++k) row_first_.push_back(field_base + other.row_first_[k]);
+  field_end_.insert(field_end_.end(), other.field_end_.begin(), other.field_end_.end());
 }
 
 void Fields::shrink_to_fit() {
@@ -64,14 +79,24 @@ void Fields::shrink_to_fit() {
 
 Fields Fields::keeping(const std::vector<int>& columns) const {
   Fields out;
-  std::vector<std::string> row;
+  std::vector<char> kept;
+  for (int c : columns) {
+    if (c < 0) continue;
+    if (static_cast<std::size_t>(c) >= kept.size()) kept.resize(static_cast<std::size_t>(c) + 1, 0);
+    kept[static_cast<std::size_t>(c)] = 1;
+  }
+  out.row_text_.reserve(row_text_.size());
+  out.row_first_.reserve(row_first_.size());
+  out.field_end_.reserve(field_end_.size());
   for (std::size_t k = 0; k < size(); ++k) {
     const Row in = (*this)[k];
-    row.assign(in.size(), std::string());
-    for (int c : columns) {
-      if (c >= 0 && static_cast<std::size_t>(c) < in.size()) row[static_cast<std::size_t>(c)] = in[static_cast<std::size_t>(c)];
+    const std::size_t start = out.text_.size();
+    for (std::size_t c = 0; c < in.size(); ++c) {
+      if (c < kept.size() && kept[c]) out.text_ += in[c];
+      out.field_end_.push_back(static_cast<std::uint32_t>(out.text_.size() - start));
     }
-    out.push_back(row);
+    out.row_text_.push_back(out.text_.size());
+    out.row_first_.push_back(out.field_end_.size());
   }
   out.shrink_to_fit();
   return out;
@@ -93,38 +118,137 @@ std::string PointTable::carried_header(const std::vector<std::string>& ours) con
 
 std::string PointTable::carried_fields(std::size_t k) const {
   std::string out;
-  for (int c : carried_columns()) out += ',' + csv_field(rows[k][static_cast<std::size_t>(c)]);
+  append_carried_fields(out, k, carried_columns());
   return out;
 }
+
+void PointTable::append_carried_fields(std::string& out, std::size_t k, const std::vector<int>& carried) const {
+  const auto row = rows[k];
+  for (int c : carried) append_csv_field(out += ',', row[static_cast<std::size_t>(c)]);
+}
+
+namespace {
+
+// One data row's columns, as the header named them.
+struct RowLayout {
+  std::vector<std::string> columns;
+  int ix = -1, iy = -1, iz = -1, ii = -1, ij = -1, ik = -1, ir = -1;
+  char separator = ',';
+  LengthUnit unit = kMillimetre;
+};
+
+// The rows of one piece of a file (whole lines), read apart from the others and joined in order.
+struct Piece {
+  std::vector<Point3> points;
+  std::vector<Vector3> normals;
+  std::vector<double> radii;
+  std::vector<int> line;  // each row's line, counted from the piece's first (1)
+  Fields rows;
+  int lines = 0;          // the lines the piece holds, rows or not
+  int error_line = 0;     // the first bad row's line in the piece (0: none), and what is wrong with it
+  std::string error;
+};
+
+// Reads the data rows of `text` (whole lines) into `piece`, stopping at the first bad one.
+void read_rows(std::string_view text, const RowLayout& layout, Piece& piece) {
+  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };  // as trim(), and CRLF's CR
+  std::vector<std::string> fields;     // a line's fields where they need unquoting or a decimal comma turned
+  std::vector<std::string_view> view;  // the line's fields, as read
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const std::size_t end = std::min(text.find('\n', at), text.size());
+    std::string_view row = text.substr(at, end - at);
+    at = end + 1;
+    const int number = ++piece.lines;
+    while (!row.empty() && blank(row.front())) row.remove_prefix(1);
+    while (!row.empty() && blank(row.back())) row.remove_suffix(1);
+    if (row.empty() || row[0] == '#') continue;
+    try {
+      view.clear();
+      if (layout.separator == ',' && row.find('"') == std::string_view::npos) {
+        // The usual machine-written line: fields cut at each comma, blanks trimmed, no copies.
+        for (std::size_t start = 0;;) {
+          const std::size_t stop = std::min(row.find(',', start), row.size());
+          std::string_view f = row.substr(start, stop - start);
+          while (!f.empty() && blank(f.front())) f.remove_prefix(1);
+          while (!f.empty() && blank(f.back())) f.remove_suffix(1);
+          view.push_back(f);
+          if (stop == row.size()) break;
+          start = stop + 1;
+        }
+      } else {
+        fields = split_fields(std::string(row), layout.separator, "");
+        for (std::string& f : fields) {
+          // With ';' or tab between fields, a decimal comma (one, and no point) is a decimal point.
+          if (layout.separator != ',' && std::count(f.begin(), f.end(), ',') == 1 && f.find('.') == std::string::npos) {
+            f[f.find(',')] = '.';
+          }
+          view.emplace_back(f);
+        }
+      }
+      if (view.size() != layout.columns.size()) {
+        throw InputError("expected " + std::to_string(layout.columns.size()) + " fields, found " + std::to_string(view.size()));
+      }
+      auto number_at = [&](int c) {
+        const std::string_view f = view[static_cast<std::size_t>(c)];
+        const std::optional<double> value = parse_number(f);
+        const std::string& column = layout.columns[static_cast<std::size_t>(c)];
+        if (!value) throw InputError("column '" + column + "' is not a number: '" + std::string(f) + "'");
+        if (!std::isfinite(*value)) throw InputError("column '" + column + "' is not finite");
+        return *value;
+      };
+      const double mm = layout.unit.mm;
+      const Point3 x(mm * number_at(layout.ix), mm * number_at(layout.iy), mm * number_at(layout.iz));
+      if (layout.ii >= 0) {
+        const Vector3 n(number_at(layout.ii), number_at(layout.ij), number_at(layout.ik));
+        if (!(n.norm() > 0.0)) throw InputError("the normal i, j, k is zero");
+        piece.normals.push_back(n.normalized());
+      }
+      if (layout.ir >= 0) {
+        const std::string_view text_r = view[static_cast<std::size_t>(layout.ir)];
+        if (text_r.empty()) {
+          piece.radii.push_back(std::numeric_limits<double>::quiet_NaN());
+        } else {
+          const double r = number_at(layout.ir);
+          if (!(r > 0.0)) throw InputError("column 'r' (the tip radius) must be positive, not " + std::string(text_r));
+          piece.radii.push_back(mm * r);
+        }
+      }
+      piece.points.push_back(x);
+    } catch (const InputError& e) {
+      piece.error_line = number;
+      piece.error = e.what();
+      return;
+    }
+    piece.rows.push_back(view);
+    piece.line.push_back(number);
+  }
+}
+
+}  // namespace
 
 PointTable read_point_csv(const std::filesystem::path& path, std::optional<LengthUnit> declared,
                           const FileProgress& progress) {
   const std::string name = path.string();
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(name + ": cannot be opened (missing or unreadable)");
   PointTable t;
   std::error_code size_error;
   const std::uintmax_t bytes = std::filesystem::file_size(path, size_error);
   if (!size_error) t.rows.reserve_text(static_cast<std::size_t>(bytes));
-  LengthUnit unit = declared.value_or(kMillimetre);
+  RowLayout layout;
+  layout.unit = declared.value_or(kMillimetre);
   std::string line;
   int number = 0;
-  int ix = -1, iy = -1, iz = -1, ii = -1, ij = -1, ik = -1, ir = -1;
   bool have_header = false;
-  std::vector<Vector3> normals;
-  std::vector<double> radii;
-  char separator = ',';
-  while (std::getline(in, line)) {
+  // The lines before the data: the unit comment, other comments, the header.
+  while (!have_header && std::getline(in, line)) {
     ++number;
-    if (progress && number % 65536 == 0 && !size_error && bytes > 0) {
-      progress(static_cast<double>(in.tellg()) / static_cast<double>(bytes));
-    }
     // A UTF-8 byte-order mark, as spreadsheet programs write, is not part of the first column's name.
     if (number == 1 && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);
     const std::string text = trim(line);  // and CRLF's CR
-    // Built only for a message: a million-row file would otherwise build a million of them.
     auto where = [&] { return name + ":" + std::to_string(number) + ": "; };
-    if (!have_header && text.starts_with('#') && lower(trim(text.substr(1))).starts_with("lengths in ")) {
+    if (text.starts_with('#') && lower(trim(text.substr(1))).starts_with("lengths in ")) {
       // The file's own statement of its unit, as points_csv writes it: what --units would otherwise have to say.
       const std::string stated = trim(trim(text.substr(1)).substr(std::string("lengths in ").size()));
       const std::optional<LengthUnit> u = length_unit(stated);
@@ -133,69 +257,82 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
         throw InputError(where() + "the file says its lengths are in " + u->name + ", not in " + declared->name +
                          " as --units says");
       }
-      unit = *u;
+      layout.unit = *u;
       continue;
     }
     if (text.empty() || text[0] == '#') continue;
-    if (!have_header) separator = detect_separator(text);
-    std::vector<std::string> fields;
+    layout.separator = detect_separator(text);
     try {
-      fields = split_fields(text, separator, "");
+      layout.columns = split_fields(text, layout.separator, "");
     } catch (const InputError& e) {
       throw InputError(where() + e.what());
     }
-    if (!have_header) {
-      t.columns = fields;
-      for (int c = 0; c < static_cast<int>(fields.size()); ++c) {
-        const std::string n = lower(fields[static_cast<std::size_t>(c)]);
-        int* slot = n == "x" ? &ix : n == "y" ? &iy : n == "z" ? &iz : n == "i" ? &ii : n == "j" ? &ij : n == "k" ? &ik : n == "r" ? &ir : nullptr;
-        if (slot != nullptr) {
-          if (*slot >= 0) throw InputError(where() + "column '" + n + "' appears twice in the header");
-          *slot = c;
-        }
-      }
-      if (ix < 0 || iy < 0 || iz < 0) throw InputError(where() + "the header must name columns x, y and z");
-      const int n_normal = (ii >= 0) + (ij >= 0) + (ik >= 0);
-      if (n_normal != 0 && n_normal != 3) throw InputError(where() + "the header names some of i, j, k but not all three");
-      have_header = true;
-      continue;
-    }
-    if (fields.size() != t.columns.size()) {
-      throw InputError(where() + "expected " + std::to_string(t.columns.size()) + " fields, found " + std::to_string(fields.size()));
-    }
-    auto number_at = [&](int c) {
-      std::string& f = fields[static_cast<std::size_t>(c)];
-      // With ';' or tab between fields, a decimal comma (one, and no point) is a decimal point.
-      if (separator != ',' && std::count(f.begin(), f.end(), ',') == 1 && f.find('.') == std::string::npos) {
-        f[f.find(',')] = '.';
-      }
-      const std::optional<double> value = parse_number(f);
-      if (!value) {
-        throw InputError(where() + "column '" + t.columns[static_cast<std::size_t>(c)] + "' is not a number: '" + f + "'");
-      }
-      if (!std::isfinite(*value)) throw InputError(where() + "column '" + t.columns[static_cast<std::size_t>(c)] + "' is not finite");
-      return *value;
-    };
-    t.points.emplace_back(unit.mm * number_at(ix), unit.mm * number_at(iy), unit.mm * number_at(iz));
-    if (ii >= 0) {
-      Vector3 n(number_at(ii), number_at(ij), number_at(ik));
-      if (!(n.norm() > 0.0)) throw InputError(where() + "the normal i, j, k is zero");
-      normals.push_back(n.normalized());
-    }
-    if (ir >= 0) {
-      if (fields[static_cast<std::size_t>(ir)].empty()) {
-        radii.push_back(std::numeric_limits<double>::quiet_NaN());
-      } else {
-        const double r = number_at(ir);
-        if (!(r > 0.0)) throw InputError(where() + "column 'r' (the tip radius) must be positive, not " + fields[static_cast<std::size_t>(ir)]);
-        radii.push_back(unit.mm * r);
+    t.columns = layout.columns;
+    for (int c = 0; c < static_cast<int>(layout.columns.size()); ++c) {
+      const std::string n = lower(layout.columns[static_cast<std::size_t>(c)]);
+      int* slot = n == "x" ? &layout.ix : n == "y" ? &layout.iy : n == "z" ? &layout.iz : n == "i" ? &layout.ii
+                : n == "j" ? &layout.ij : n == "k" ? &layout.ik : n == "r" ? &layout.ir : nullptr;
+      if (slot != nullptr) {
+        if (*slot >= 0) throw InputError(where() + "column '" + n + "' appears twice in the header");
+        *slot = c;
       }
     }
-    t.rows.push_back(fields);
-    t.line.push_back(number);
+    if (layout.ix < 0 || layout.iy < 0 || layout.iz < 0) throw InputError(where() + "the header must name columns x, y and z");
+    const int n_normal = (layout.ii >= 0) + (layout.ij >= 0) + (layout.ik >= 0);
+    if (n_normal != 0 && n_normal != 3) throw InputError(where() + "the header names some of i, j, k but not all three");
+    have_header = true;
   }
-  t.unit = unit;
   if (!have_header) throw InputError(name + ": no header line (expected columns x,y,z)");
+
+  // The data rows, read in blocks of whole lines; each block is cut into pieces read in parallel and joined in
+  // order (the same table whatever the thread count). A bad row stops the read at the first one in the file.
+  constexpr std::size_t kBlockBytes = std::size_t{16} << 20;
+  constexpr std::size_t kPieceBytes = std::size_t{1} << 18;
+  std::vector<Vector3> normals;
+  std::vector<double> radii;
+  std::string block, carry;
+  std::vector<std::string_view> parts;
+  std::vector<Piece> pieces;
+  std::size_t done = 0;
+  while (in) {
+    block.resize(carry.size() + kBlockBytes);
+    std::copy(carry.begin(), carry.end(), block.begin());
+    in.read(block.data() + carry.size(), static_cast<std::streamsize>(kBlockBytes));
+    block.resize(carry.size() + static_cast<std::size_t>(in.gcount()));
+    carry.clear();
+    if (in) {
+      // Not the end: the last line may be cut; it starts the next block.
+      const std::size_t last = block.rfind('\n');
+      const std::size_t keep = last == std::string::npos ? 0 : last + 1;
+      carry.assign(block, keep, std::string::npos);
+      block.resize(keep);
+    }
+    done += block.size();
+    parts.clear();
+    const std::string_view all(block);
+    for (std::size_t at = 0; at < all.size();) {
+      std::size_t end = std::min(all.size(), at + kPieceBytes);
+      if (end < all.size()) {
+        const std::size_t newline = all.find('\n', end - 1);
+        end = newline == std::string_view::npos ? all.size() : newline + 1;
+      }
+      parts.push_back(all.substr(at, end - at));
+      at = end;
+    }
+    pieces.assign(parts.size(), Piece{});
+    tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) { read_rows(parts[k], layout, pieces[k]); });
+    for (Piece& piece : pieces) {
+      if (piece.error_line > 0) throw InputError(name + ":" + std::to_string(number + piece.error_line) + ": " + piece.error);
+      t.points.insert(t.points.end(), piece.points.begin(), piece.points.end());
+      normals.insert(normals.end(), piece.normals.begin(), piece.normals.end());
+      radii.insert(radii.end(), piece.radii.begin(), piece.radii.end());
+      for (int l : piece.line) t.line.push_back(number + l);
+      t.rows.append(piece.rows);
+      number += piece.lines;
+    }
+    if (progress && !size_error && bytes > 0) progress(static_cast<double>(done) / static_cast<double>(bytes));
+  }
+  t.unit = layout.unit;
   if (t.points.empty()) throw InputError(name + ": no points");
   // The arrays grew by doubling: without their spare room they hold a million rows in about 150 MB, not 250.
   t.rows.shrink_to_fit();
@@ -203,8 +340,8 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
   t.line.shrink_to_fit();
   normals.shrink_to_fit();
   radii.shrink_to_fit();
-  if (ii >= 0) t.normals = std::move(normals);
-  if (ir >= 0) t.radii = std::move(radii);
+  if (layout.ii >= 0) t.normals = std::move(normals);
+  if (layout.ir >= 0) t.radii = std::move(radii);
   return t;
 }
 
@@ -231,6 +368,8 @@ std::string points_csv(const PointTable& t) {
   if (!(t.unit == kMillimetre)) out << "# lengths in " << t.unit.name << '\n';
   for (std::size_t c = 0; c < ours.size(); ++c) out << (c ? "," : "") << ours[c];
   out << t.carried_header(ours) << '\n';
+  const std::vector<int> carried = t.carried_columns();
+  std::string fields;
   for (std::size_t k = 0; k < t.points.size(); ++k) {
     const Point3& x = t.points[k];
     out << exact(row_value(t, ix, k, scale * x.x())) << ',' << exact(row_value(t, iy, k, scale * x.y())) << ','
@@ -244,7 +383,11 @@ std::string points_csv(const PointTable& t) {
       const double r = (*t.radii)[k];
       out << ',' << (std::isnan(r) ? std::string() : exact(row_value(t, ir, k, scale * r)));
     }
-    if (!t.rows.empty()) out << t.carried_fields(k);
+    if (!t.rows.empty()) {
+      fields.clear();
+      t.append_carried_fields(fields, k, carried);
+      out << fields;
+    }
     out << '\n';
   }
   return out.str();

@@ -126,11 +126,60 @@ TEST(PointTable, DroppingTheNumbersTextKeepsTheCarriedFieldsAndLosesNoValueInMil
   EXPECT_EQ(inch.rows[0][0], "0.1");
 }
 
+// The reader cuts the rows into blocks of 16 MB and those into pieces read in parallel: rows across both cuts, with
+// comments and blank lines among them, come back in order with their own line numbers, and a bad row past the
+// first block is named by its line.
+TEST(PointTable, ALargeFileReadInPiecesKeepsEveryRowItsLineAndOrder) {
+  constexpr int kRows = 620'000;  // about 19 MB
+  std::string text = "# a scan\nx,y,z,id\n";
+  std::vector<int> line(kRows);
+  int number = 2;
+  for (int k = 0; k < kRows; ++k) {
+    if (k % 1000 == 999) {
+      text += "# comment\n";
+      ++number;
+    }
+    if (k % 777 == 0) {
+      text += "\n";
+      ++number;
+    }
+    text += std::to_string(k) + ".25," + std::to_string(-k) + ",0.5,P" + std::to_string(k) + "\r\n";
+    line[static_cast<std::size_t>(k)] = ++number;
+  }
+  ASSERT_GT(text.size(), std::size_t{17} << 20);
+  const PointTable t = read_text(text);
+  ASSERT_EQ(t.points.size(), static_cast<std::size_t>(kRows));
+  int wrong = 0;
+  for (int k = 0; k < kRows; ++k) {
+    const std::size_t i = static_cast<std::size_t>(k);
+    const std::string id = std::to_string(k);
+    wrong += t.points[i] != Point3(k + 0.25, -k, 0.5) || t.line[i] != line[i] || t.rows[i][3] != "P" + id;
+  }
+  EXPECT_EQ(wrong, 0);
+
+  // A row past the first 16 MB with a letter in y.
+  const int bad = 580'000;
+  const std::string row = std::to_string(bad) + ".25," + std::to_string(-bad) + ",";
+  std::string needle(1, '\n');
+  needle += row;
+  const std::size_t at = text.find(needle) + 1;
+  std::string broken = text;
+  broken[at + std::to_string(bad).size() + 4] = 'q';
+  try {
+    (void)read_text(broken);
+    ADD_FAILURE() << "a bad row was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(".csv:" + std::to_string(line[bad]) + ": column 'y' is not a number: 'q"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Fields, RowsOfAnyLengthComeBackAsWritten) {
   Fields f;
   EXPECT_TRUE(f.empty());
   f.push_back({"1.5", "", "a,b"});
-  f.push_back({});
+  f.push_back(std::vector<std::string>{});  // a row of no fields
   f.push_back({"x"});
   f.push_back({"", ""});
   f.shrink_to_fit();

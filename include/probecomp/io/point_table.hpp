@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <cstdint>
 #include <string>
@@ -52,7 +53,10 @@ class Fields {
     std::size_t k_;
   };
 
+  void push_back(std::span<const std::string_view> row);
   void push_back(const std::vector<std::string>& row);
+  // Appends every row of `other`, in order.
+  void append(const Fields& other);
   // Room for this much text (a file's size bounds its fields' text), and no spare room once all rows are in.
   void reserve_text(std::size_t bytes) { text_.reserve(bytes); }
   void shrink_to_fit();
@@ -96,6 +100,8 @@ struct PointTable {
   // each quoted where it needs to be (io/text.hpp csv_field).
   [[nodiscard]] std::string carried_header(const std::vector<std::string>& ours) const;
   [[nodiscard]] std::string carried_fields(std::size_t k) const;
+  // The same appended to `out`, with `carried` = carried_columns() found once for all rows.
+  void append_carried_fields(std::string& out, std::size_t k, const std::vector<int>& carried) const;
   // Frees the text of the numbers (x, y, z, i, j, k, r), keeping the carried columns', where that loses nothing an
   // output of compensated points needs: in mm, `points` and `radii` hold the very doubles the text gave (a million
   // rows: 85 MB less). Does nothing in another unit, where the text is the exact value in the file's unit.

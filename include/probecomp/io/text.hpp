@@ -37,14 +37,20 @@ namespace probecomp::io {
 
 // A field for a comma-separated output: as it is, or in double quotes (its quotes doubled) when it holds a comma,
 // a quote or a line break (RFC 4180), so that a field read from a quoted input is written back whole.
-[[nodiscard]] inline std::string csv_field(std::string_view s) {
-  if (s.find_first_of(",\"\r\n") == std::string_view::npos) return std::string(s);
-  std::string out = "\"";
+// append_csv_field appends it to `out` (a million rows' ids without a string each).
+inline std::string& append_csv_field(std::string& out, std::string_view s) {
+  if (s.find_first_of(",\"\r\n") == std::string_view::npos) return out.append(s);
+  out += '"';
   for (char c : s) {
     if (c == '"') out += '"';
     out += c;
   }
-  return out + '"';
+  out += '"';
+  return out;
+}
+[[nodiscard]] inline std::string csv_field(std::string_view s) {
+  std::string out;
+  return append_csv_field(out, s);
 }
 
 // Fields of one line, split at `separator` outside double quotes (RFC 4180: a quoted field may hold the separator,
