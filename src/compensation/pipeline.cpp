@@ -489,7 +489,10 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     // (differences of neighbouring residuals) would read low, the cross-validation would take the copies as
     // confirming each other, and the fit would chase the noise (10 % repeated on the free-form case: 1 927
     // control points instead of 783).
-    const std::vector<std::uint32_t> first = geometry::first_at_same_position(member_points, kSamePosition);
+    // With each point's nearest other (the fit's noise estimate takes differences of neighbouring residuals), from
+    // the same k-d tree.
+    geometry::NearestAndFirst around = geometry::nearest_other_and_first(member_points, kSamePosition);
+    const std::vector<std::uint32_t>& first = around.first;
     std::vector<std::uint32_t> position(members.size());  // member → its position among the fitted points
     std::vector<Point3> pts;
     std::vector<std::size_t> fitted_point;  // fitted point → its input index
@@ -513,9 +516,10 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     const double needed = options.min_points_per_control_point * start.num_u() * start.num_v();
     std::optional<fitting::AdaptiveFitResult>& fit = ff.fit;
     std::vector<double> weights(pts.size(), 1.0);
-    // Each point's nearest other point, once per face for all its refits (the fit's noise estimate takes
-    // differences of neighbouring residuals).
-    const std::vector<std::uint32_t> nearest = fitting::nearest_neighbours(pts);
+    // Each point's nearest other point, once per face for all its refits. Without repeats the fitted points are the
+    // members in order, whose nearest are at hand; with them, found again among the points kept.
+    const std::vector<std::uint32_t> nearest = rep.repeated == 0 ? std::move(around.nearest) : fitting::nearest_neighbours(pts);
+    around = {};
     auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at) {
       fit = fitting::fit_surface(from, pts, at, weights, options.surface, nearest);
       ++rep.fits;

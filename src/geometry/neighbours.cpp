@@ -9,24 +9,34 @@
 
 namespace probecomp::geometry {
 
-std::vector<std::uint32_t> nearest_others(std::span<const Point3> points, int count) {
+namespace {
+
+// A k-d tree over a copy of the points.
+struct Tree {
+  PointCloud cloud;
+  PointTree tree;
+  explicit Tree(std::span<const Point3> points)
+      : cloud{std::vector<Point3>(points.begin(), points.end())}, tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
+    tree.buildIndex();
+  }
+};
+
+// `tree` over `points`; null when there are fewer than 2.
+std::vector<std::uint32_t> nearest_others_in(const PointTree* tree, std::span<const Point3> points, int count) {
   const std::size_t n = points.size(), m = static_cast<std::size_t>(std::max(count, 0));
   std::vector<std::uint32_t> out(n * m, 0);
   if (n == 0 || m == 0) return out;
   if (n == 1) return out;  // a point alone lists itself
-  PointCloud cloud{std::vector<Point3>(points.begin(), points.end())};
-  PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  tree.buildIndex();
   const std::size_t wanted = std::min(m + 1, n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
     std::vector<std::uint32_t> index(wanted);
     std::vector<double> dist_sq(wanted);  // squared distances (nanoflann's L2 adaptor)
     for (std::size_t pos = range.begin(); pos != range.end(); ++pos) {
-      const std::size_t k = tree.vAcc[pos];  // the tree's leaf order: neighbouring queries share cached nodes
+      const std::size_t k = tree->vAcc[pos];  // the tree's leaf order: neighbouring queries share cached nodes
       nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(wanted);
       knn.init(index.data(), dist_sq.data());
       const double q[3] = {points[k].x(), points[k].y(), points[k].z()};
-      tree.findNeighbors(knn, q, nanoflann::SearchParams());
+      tree->findNeighbors(knn, q, nanoflann::SearchParams());
       // Fewer than asked only for a point with a non-finite coordinate: then the first slots alone are this
       // query's.
       const std::size_t found = std::max<std::size_t>(knn.size(), 1);
@@ -50,14 +60,12 @@ std::vector<std::uint32_t> nearest_others(std::span<const Point3> points, int co
   return out;
 }
 
-std::vector<std::uint32_t> first_at_same_position(std::span<const Point3> points, double tolerance) {
+std::vector<std::uint32_t> first_at_same_position_in(const PointTree* tree, std::span<const Point3> points,
+                                                     double tolerance) {
   const std::size_t n = points.size();
   std::vector<std::uint32_t> first(n);
   for (std::size_t k = 0; k < n; ++k) first[k] = static_cast<std::uint32_t>(k);
   if (n < 2) return first;
-  PointCloud cloud{std::vector<Point3>(points.begin(), points.end())};
-  PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  tree.buildIndex();
   // nanoflann's radius is a squared distance; a point's search always finds itself, so the lowest index found is
   // at most its own.
   const double radius_sq = tolerance * tolerance;
@@ -67,7 +75,7 @@ std::vector<std::uint32_t> first_at_same_position(std::span<const Point3> points
       if (!points[k].allFinite()) continue;
       found.clear();
       const double q[3] = {points[k].x(), points[k].y(), points[k].z()};
-      tree.radiusSearch(q, radius_sq, found, nanoflann::SearchParams(32, 0.0, false));
+      tree->radiusSearch(q, radius_sq, found, nanoflann::SearchParams(32, 0.0, false));
       for (const auto& [j, d_sq] : found) first[k] = std::min(first[k], j);
     }
   });
@@ -75,6 +83,26 @@ std::vector<std::uint32_t> first_at_same_position(std::span<const Point3> points
   // resolution) still names one first point per group: the first point's own first.
   for (std::size_t k = 0; k < n; ++k) first[k] = first[first[k]];
   return first;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> nearest_others(std::span<const Point3> points, int count) {
+  if (points.size() < 2 || count <= 0) return nearest_others_in(nullptr, points, count);
+  const Tree t(points);
+  return nearest_others_in(&t.tree, points, count);
+}
+
+std::vector<std::uint32_t> first_at_same_position(std::span<const Point3> points, double tolerance) {
+  if (points.size() < 2) return first_at_same_position_in(nullptr, points, tolerance);
+  const Tree t(points);
+  return first_at_same_position_in(&t.tree, points, tolerance);
+}
+
+NearestAndFirst nearest_other_and_first(std::span<const Point3> points, double tolerance) {
+  if (points.size() < 2) return {nearest_others_in(nullptr, points, 1), first_at_same_position_in(nullptr, points, tolerance)};
+  const Tree t(points);
+  return {nearest_others_in(&t.tree, points, 1), first_at_same_position_in(&t.tree, points, tolerance)};
 }
 
 }  // namespace probecomp::geometry

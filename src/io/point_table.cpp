@@ -178,13 +178,16 @@ void read_rows(std::string_view text, const RowLayout& layout, Piece& piece) {
         }
       } else {
         fields = split_fields(std::string(row), layout.separator, "");
-        for (std::string& f : fields) {
-          // With ';' or tab between fields, a decimal comma (one, and no point) is a decimal point.
-          if (layout.separator != ',' && std::count(f.begin(), f.end(), ',') == 1 && f.find('.') == std::string::npos) {
-            f[f.find(',')] = '.';
+        if (layout.separator != ',') {
+          // With ';' or tab between fields, a number's decimal comma (one, and no point) is a decimal point; the
+          // carried columns stay as written.
+          for (int c : {layout.ix, layout.iy, layout.iz, layout.ii, layout.ij, layout.ik, layout.ir}) {
+            if (c < 0 || static_cast<std::size_t>(c) >= fields.size()) continue;
+            std::string& f = fields[static_cast<std::size_t>(c)];
+            if (std::count(f.begin(), f.end(), ',') == 1 && f.find('.') == std::string::npos) f[f.find(',')] = '.';
           }
-          view.emplace_back(f);
         }
+        view.assign(fields.begin(), fields.end());
       }
       if (view.size() != layout.columns.size()) {
         throw InputError("expected " + std::to_string(layout.columns.size()) + " fields, found " + std::to_string(view.size()));
