@@ -82,9 +82,9 @@ Loaded load(const std::string& cad_path, const std::string& points_path, std::op
   if (!initial_transform.empty()) l.initial = io::read_transform(initial_transform);
   std::optional<io::LengthUnit> declared;
   if (!units.empty()) declared = io::length_unit(units);
-  l.table = io::read_points(points_path, declared, [&](double f) { bar.update("reading", kReadShare * f); });
+  l.table = io::read_points(points_path, declared, [&](double f) { bar.update("reading", kReadShare * f); },
+                            io::NumberText::Drop);
   bar.set_points(l.table.points.size());
-  l.table.drop_number_text();
   std::optional<double> default_mm;
   if (r) default_mm = *r * l.table.unit.mm;
   l.radii = tip_radii(l.table, default_mm, points_path);

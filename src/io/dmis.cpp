@@ -207,10 +207,17 @@ bool is_dmis(const std::filesystem::path& path) {
 }
 
 PointTable read_points(const std::filesystem::path& path, std::optional<LengthUnit> declared,
-                       const FileProgress& progress) {
-  if (is_dmis(path)) return read_point_dmis(path, declared);
-  if (is_qif(path)) return read_point_qif(path, declared);
-  return read_point_csv(path, declared, progress);
+                       const FileProgress& progress, NumberText number_text) {
+  PointTable t;
+  if (is_dmis(path)) {
+    t = read_point_dmis(path, declared);
+  } else if (is_qif(path)) {
+    t = read_point_qif(path, declared);
+  } else {
+    return read_point_csv(path, declared, progress, number_text);
+  }
+  if (number_text == NumberText::Drop) t.drop_number_text();
+  return t;
 }
 
 PointTable read_point_dmis(const std::filesystem::path& path, std::optional<LengthUnit> declared) {

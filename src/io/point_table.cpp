@@ -46,6 +46,16 @@ std::vector<int> PointTable::carried_columns() const {
 
 void Fields::push_back(std::span<const std::string_view> row) {
   const std::size_t start = text_.size();
+  if (compact()) {
+    if (row.size() != width_) throw std::logic_error("Fields::push_back: a row of another width on a compact table");
+    for (std::size_t c = 0; c < width_; ++c) {
+      if (slot_[c] < 0) continue;
+      text_ += row[c];
+      field_end_.push_back(static_cast<std::uint32_t>(text_.size() - start));
+    }
+    row_text_.push_back(text_.size());
+    return;
+  }
   for (const std::string_view f : row) {
     text_ += f;
     if (text_.size() - start > std::numeric_limits<std::uint32_t>::max()) {
@@ -57,46 +67,70 @@ void Fields::push_back(std::span<const std::string_view> row) {
   row_first_.push_back(field_end_.size());
 }
 
+Fields Fields::keeping_only(std::size_t width, const std::vector<int>& columns) {
+  Fields out;
+  out.width_ = width;
+  out.slot_.assign(std::max(width, std::size_t{1}), -1);
+  for (std::size_t c = 0; c < width; ++c) {
+    if (std::find(columns.begin(), columns.end(), static_cast<int>(c)) != columns.end()) {
+      out.slot_[c] = static_cast<int>(out.kept_++);
+    }
+  }
+  out.row_first_.clear();
+  return out;
+}
+
 void Fields::push_back(const std::vector<std::string>& row) {
   std::vector<std::string_view> views(row.begin(), row.end());
   push_back(views);
 }
 
 void Fields::append(const Fields& other) {
+  if (compact() != other.compact() || (compact() && (slot_ != other.slot_ || width_ != other.width_))) {
+    throw std::logic_error("Fields::append: tables that keep different columns");
+  }
   const std::uint64_t text_base = text_.size(), field_base = field_end_.size();
   text_ += other.text_;
   for (std::size_t k = 1; k < other.row_text_.size(); ++k) row_text_.push_back(text_base + other.row_text_[k]);
-  for (std::size_t k = 1; k < other.row_first_.size(); ++k) row_first_.push_back(field_base + other.row_first_[k]);
+  if (!compact()) {
+    for (std::size_t k = 1; k < other.row_first_.size(); ++k) row_first_.push_back(field_base + other.row_first_[k]);
+  }
   field_end_.insert(field_end_.end(), other.field_end_.begin(), other.field_end_.end());
 }
 
 void Fields::shrink_to_fit() {
-  text_.shrink_to_fit();
-  row_text_.shrink_to_fit();
-  row_first_.shrink_to_fit();
-  field_end_.shrink_to_fit();
+  // A copy each: only where more than a little room is spare.
+  auto shrink = [](auto& v) {
+    if (v.capacity() > v.size() + v.size() / 16) v.shrink_to_fit();
+  };
+  shrink(text_);
+  shrink(row_text_);
+  shrink(row_first_);
+  shrink(field_end_);
 }
 
 Fields Fields::keeping(const std::vector<int>& columns) const {
+  const std::size_t width = empty() ? 0 : (*this)[0].size();
+  bool uniform = width > 0;
+  for (std::size_t k = 1; uniform && k < size(); ++k) uniform = (*this)[k].size() == width;
   Fields out;
-  std::vector<char> kept;
-  for (int c : columns) {
-    if (c < 0) continue;
-    if (static_cast<std::size_t>(c) >= kept.size()) kept.resize(static_cast<std::size_t>(c) + 1, 0);
-    kept[static_cast<std::size_t>(c)] = 1;
+  if (uniform) {
+    out = keeping_only(width, columns);
+    out.row_text_.reserve(row_text_.size());
+    out.field_end_.reserve(size() * out.kept_);
+  } else {
+    out.row_text_.reserve(row_text_.size());
+    out.row_first_.reserve(row_first_.size());
+    out.field_end_.reserve(field_end_.size());
   }
-  out.row_text_.reserve(row_text_.size());
-  out.row_first_.reserve(row_first_.size());
-  out.field_end_.reserve(field_end_.size());
+  std::vector<std::string_view> row;
   for (std::size_t k = 0; k < size(); ++k) {
     const Row in = (*this)[k];
-    const std::size_t start = out.text_.size();
-    for (std::size_t c = 0; c < in.size(); ++c) {
-      if (c < kept.size() && kept[c]) out.text_ += in[c];
-      out.field_end_.push_back(static_cast<std::uint32_t>(out.text_.size() - start));
+    row.assign(in.size(), std::string_view());
+    for (int c : columns) {
+      if (c >= 0 && static_cast<std::size_t>(c) < in.size()) row[static_cast<std::size_t>(c)] = in[static_cast<std::size_t>(c)];
     }
-    out.row_text_.push_back(out.text_.size());
-    out.row_first_.push_back(out.field_end_.size());
+    out.push_back(row);
   }
   out.shrink_to_fit();
   return out;
@@ -231,14 +265,13 @@ void read_rows(std::string_view text, const RowLayout& layout, Piece& piece) {
 }  // namespace
 
 PointTable read_point_csv(const std::filesystem::path& path, std::optional<LengthUnit> declared,
-                          const FileProgress& progress) {
+                          const FileProgress& progress, NumberText number_text) {
   const std::string name = path.string();
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(name + ": cannot be opened (missing or unreadable)");
   PointTable t;
   std::error_code size_error;
   const std::uintmax_t bytes = std::filesystem::file_size(path, size_error);
-  if (!size_error) t.rows.reserve_text(static_cast<std::size_t>(bytes));
   RowLayout layout;
   layout.unit = declared.value_or(kMillimetre);
   std::string line;
@@ -286,6 +319,14 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
     have_header = true;
   }
   if (!have_header) throw InputError(name + ": no header line (expected columns x,y,z)");
+  // In mm the numbers' text need not be kept (drop_number_text): each row keeps only its carried fields.
+  Fields no_rows;
+  if (number_text == NumberText::Drop && layout.unit.mm == 1.0) {
+    no_rows = Fields::keeping_only(t.columns.size(), t.carried_columns());
+    t.rows = no_rows;
+  } else if (!size_error) {
+    t.rows.reserve_text(static_cast<std::size_t>(bytes));
+  }
 
   // The data rows, read in blocks of whole lines; each block is cut into pieces read in parallel and joined in
   // order (the same table whatever the thread count). A bad row stops the read at the first one in the file.
@@ -297,6 +338,7 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
   std::vector<std::string_view> parts;
   std::vector<Piece> pieces;
   std::size_t done = 0;
+  bool first_block = true;
   while (in) {
     block.resize(carry.size() + kBlockBytes);
     std::copy(carry.begin(), carry.end(), block.begin());
@@ -323,6 +365,7 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
       at = end;
     }
     pieces.assign(parts.size(), Piece{});
+    for (Piece& piece : pieces) piece.rows = no_rows;
     tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) { read_rows(parts[k], layout, pieces[k]); });
     for (Piece& piece : pieces) {
       if (piece.error_line > 0) throw InputError(name + ":" + std::to_string(number + piece.error_line) + ": " + piece.error);
@@ -333,16 +376,30 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
       t.rows.append(piece.rows);
       number += piece.lines;
     }
+    if (first_block && in && !size_error && bytes > done) {
+      // The rows to come, estimated from this block's, with 2 % to spare: the arrays are allocated once instead of
+      // growing by doubling (which holds the old and the new array at once).
+      first_block = false;
+      const double per_byte = static_cast<double>(t.points.size()) / static_cast<double>(done);
+      const auto expected = static_cast<std::size_t>(1.02 * per_byte * static_cast<double>(bytes)) + 16;
+      t.points.reserve(expected);
+      t.line.reserve(expected);
+      if (layout.ii >= 0) normals.reserve(expected);
+      if (layout.ir >= 0) radii.reserve(expected);
+    }
     if (progress && !size_error && bytes > 0) progress(static_cast<double>(done) / static_cast<double>(bytes));
   }
   t.unit = layout.unit;
   if (t.points.empty()) throw InputError(name + ": no points");
-  // The arrays grew by doubling: without their spare room they hold a million rows in about 150 MB, not 250.
+  // Without spare room (a copy, so only where there is more than a little).
+  auto shrink = [](auto& v) {
+    if (v.capacity() > v.size() + v.size() / 16) v.shrink_to_fit();
+  };
   t.rows.shrink_to_fit();
-  t.points.shrink_to_fit();
-  t.line.shrink_to_fit();
-  normals.shrink_to_fit();
-  radii.shrink_to_fit();
+  shrink(t.points);
+  shrink(t.line);
+  shrink(normals);
+  shrink(radii);
   if (layout.ii >= 0) t.normals = std::move(normals);
   if (layout.ir >= 0) t.radii = std::move(radii);
   return t;

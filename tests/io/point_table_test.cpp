@@ -175,6 +175,36 @@ TEST(PointTable, ALargeFileReadInPiecesKeepsEveryRowItsLineAndOrder) {
   }
 }
 
+TEST(Fields, KeepingSomeColumnsOfEqualRowsStoresOnlyThose) {
+  Fields f;
+  f.push_back({"1.5", "2", "a,b", "id7"});
+  f.push_back({"-3", "", "", "id8"});
+  const Fields kept = f.keeping({3, 2});
+  ASSERT_EQ(kept.size(), 2u);
+  ASSERT_EQ(kept[0].size(), 4u);
+  EXPECT_EQ(kept[0][0], "");
+  EXPECT_EQ(kept[0][1], "");
+  EXPECT_EQ(kept[0][2], "a,b");
+  EXPECT_EQ(kept[0][3], "id7");
+  EXPECT_EQ(kept[1][2], "");
+  EXPECT_EQ(kept[1][3], "id8");
+  // Rows added later keep the same columns; one of another width cannot be.
+  Fields compact = kept;
+  compact.push_back(std::vector<std::string>{"x", "y", "z", "w"});
+  EXPECT_EQ(compact[2][0], "");
+  EXPECT_EQ(compact[2][2], "z");
+  EXPECT_EQ(compact[2][3], "w");
+  EXPECT_THROW(compact.push_back(std::vector<std::string>{"x", "y", "z"}), std::logic_error);
+  EXPECT_THROW(compact.append(f), std::logic_error);
+  // Rows of different lengths keep every field's place.
+  f.push_back({"9"});
+  const Fields ragged = f.keeping({0});
+  ASSERT_EQ(ragged[2].size(), 1u);
+  EXPECT_EQ(ragged[2][0], "9");
+  EXPECT_EQ(ragged[0][0], "1.5");
+  EXPECT_EQ(ragged[0][3], "");
+}
+
 TEST(Fields, RowsOfAnyLengthComeBackAsWritten) {
   Fields f;
   EXPECT_TRUE(f.empty());

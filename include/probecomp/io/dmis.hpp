@@ -33,7 +33,7 @@ namespace probecomp::io {
 // `progress` is heard while a CSV is read (the usual form of a long scan).
 [[nodiscard]] PointTable read_points(const std::filesystem::path& path,
                                      std::optional<LengthUnit> declared = std::nullopt,
-                                     const FileProgress& progress = {});
+                                     const FileProgress& progress = {}, NumberText number_text = NumberText::Keep);
 [[nodiscard]] bool is_dmis(const std::filesystem::path& path);
 
 // One `FA(label)=FEAT/POINT,CART,x,y,z,i,j,k` statement: x in mm written in `unit` (9 decimals), the unit normal

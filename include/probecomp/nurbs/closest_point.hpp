@@ -25,7 +25,8 @@
 
 namespace probecomp::nurbs {
 
-enum class ClosestPointStatus {
+// One byte: it is kept for every measured point (registration::PointMatch).
+enum class ClosestPointStatus : std::uint8_t {
   Converged,       // interior foot point: S − P is orthogonal to S_u and S_v (or P lies on the surface)
   OnBoundary,      // the closest point is on an edge or corner of the domain (constrained minimum)
   NotConverged,    // iteration limit reached without meeting the conditions: the point is not trusted

@@ -51,19 +51,21 @@ enum class Status {
 [[nodiscard]] const char* to_string(Status status);
 
 // One measured point's correspondence on the model at the final transform.
+// Its members ordered so that the small ones share a word: 40 bytes (a million points: 40 MB).
 struct PointMatch {
-  nurbs::ClosestPointStatus status = nurbs::ClosestPointStatus::NotConverged;
-  int face = -1;
   double u = 0.0, v = 0.0;
   double distance = 0.0;      // signed, + on the model's outward side, mm (in CAD frame = machine frame)
-  bool on_edge = false;       // the foot point is on a face's trim or domain edge: the point lies beyond it
   double weight = 0.0;        // robust weight in the last step; 0 when not used
+  int face = -1;
+  nurbs::ClosestPointStatus status = nurbs::ClosestPointStatus::NotConverged;
+  bool on_edge = false;       // the foot point is on a face's trim or domain edge: the point lies beyond it
   bool inlier = false;        // used, and |distance| ≤ kOutlierSigmas · scale
 
   [[nodiscard]] bool ok() const {
     return status == nurbs::ClosestPointStatus::Converged || status == nurbs::ClosestPointStatus::OnBoundary;
   }
 };
+static_assert(sizeof(PointMatch) == 40);
 
 struct RegistrationResult {
   Status status = Status::TooFewPoints;
