@@ -21,13 +21,16 @@ struct Tree {
   }
 };
 
-// `tree` over `points`; null when there are fewer than 2.
-std::vector<std::uint32_t> nearest_others_in(const PointTree* tree, std::span<const Point3> points, int count) {
+// `tree` over `points`; null when there are fewer than 2. `within`, when given, is set for each point that has
+// another within `tolerance` (mm) among the neighbours found.
+std::vector<std::uint32_t> nearest_others_in(const PointTree* tree, std::span<const Point3> points, int count,
+                                             std::vector<char>* within = nullptr, double tolerance = 0.0) {
   const std::size_t n = points.size(), m = static_cast<std::size_t>(std::max(count, 0));
   std::vector<std::uint32_t> out(n * m, 0);
   if (n == 0 || m == 0) return out;
   if (n == 1) return out;  // a point alone lists itself
   const std::size_t wanted = std::min(m + 1, n);
+  if (within != nullptr) within->assign(n, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
     std::vector<std::uint32_t> index(wanted);
     std::vector<double> dist_sq(wanted);  // squared distances (nanoflann's L2 adaptor)
@@ -55,13 +58,20 @@ std::vector<std::uint32_t> nearest_others_in(const PointTree* tree, std::span<co
         if (i != skip) out[k * m + j++] = index[i];
       }
       for (; j < m; ++j) out[k * m + j] = out[k * m + j - 1];
+      if (within != nullptr) {
+        for (std::size_t i = 0; i < knn.size(); ++i) {
+          if (index[i] != k && dist_sq[i] <= tolerance * tolerance) (*within)[k] = 1;  // squared, as nanoflann's
+        }
+      }
     }
   });
   return out;
 }
 
+// `candidates`, when given, marks the only points that can have another within the tolerance (the others are their
+// own first without a search).
 std::vector<std::uint32_t> first_at_same_position_in(const PointTree* tree, std::span<const Point3> points,
-                                                     double tolerance) {
+                                                     double tolerance, const std::vector<char>* candidates = nullptr) {
   const std::size_t n = points.size();
   std::vector<std::uint32_t> first(n);
   for (std::size_t k = 0; k < n; ++k) first[k] = static_cast<std::uint32_t>(k);
@@ -72,7 +82,7 @@ std::vector<std::uint32_t> first_at_same_position_in(const PointTree* tree, std:
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
     std::vector<std::pair<std::uint32_t, double>> found;
     for (std::size_t k = range.begin(); k != range.end(); ++k) {
-      if (!points[k].allFinite()) continue;
+      if (!points[k].allFinite() || (candidates != nullptr && !(*candidates)[k])) continue;
       found.clear();
       const double q[3] = {points[k].x(), points[k].y(), points[k].z()};
       tree->radiusSearch(q, radius_sq, found, nanoflann::SearchParams(32, 0.0, false));
@@ -102,7 +112,11 @@ std::vector<std::uint32_t> first_at_same_position(std::span<const Point3> points
 NearestAndFirst nearest_other_and_first(std::span<const Point3> points, double tolerance) {
   if (points.size() < 2) return {nearest_others_in(nullptr, points, 1), first_at_same_position_in(nullptr, points, tolerance)};
   const Tree t(points);
-  return {nearest_others_in(&t.tree, points, 1), first_at_same_position_in(&t.tree, points, tolerance)};
+  // The nearest other tells which points may repeat another: only those are searched around (a million distinct
+  // points: no radius search at all).
+  std::vector<char> within;
+  std::vector<std::uint32_t> nearest = nearest_others_in(&t.tree, points, 1, &within, tolerance);
+  return {std::move(nearest), first_at_same_position_in(&t.tree, points, tolerance, &within)};
 }
 
 }  // namespace probecomp::geometry

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <random>
 #include <vector>
 
 namespace probecomp::geometry {
@@ -44,6 +45,33 @@ TEST(FirstAtSamePosition, AChainWithinTheToleranceIsOneGroupAndNonFinitePointsSt
   const std::vector<Point3> p = {{0, 0, 0}, {0.6, 0, 0}, {1.2, 0, 0}, {nan, 0, 0}, {nan, 0, 0}};
   EXPECT_EQ(first_at_same_position(p, 1.0), (std::vector<std::uint32_t>{0, 0, 0, 3, 4}));
   EXPECT_TRUE(first_at_same_position({}, 1.0).empty());
+}
+
+// From one tree, and with the radius search only where the nearest other point is within the tolerance, the same
+// lists as the two functions apart: random points, exact repeats, near repeats (5e-10 mm off), a chain and
+// non-finite points.
+TEST(NearestOtherAndFirst, EqualsBothFunctionsApart) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> x(-50.0, 50.0);
+  std::vector<Point3> p;
+  for (int k = 0; k < 3000; ++k) p.emplace_back(x(rng), x(rng), 0.01 * x(rng));
+  for (int k = 0; k < 300; ++k) p.push_back(p[static_cast<std::size_t>(k * 7)]);
+  for (int k = 0; k < 50; ++k) p.push_back(p[static_cast<std::size_t>(k * 11)] + Point3(5e-10, 0, 0));
+  p.push_back({nan, 0, 0});
+  p.push_back({100, 0, 0});
+  p.push_back({100 + 0.6e-9, 0, 0});
+  p.push_back({100 + 1.2e-9, 0, 0});
+  const NearestAndFirst both = nearest_other_and_first(p, 1e-9);
+  EXPECT_EQ(both.nearest, nearest_others(p, 1));
+  EXPECT_EQ(both.first, first_at_same_position(p, 1e-9));
+  // The chain at x = 100 is one group, named by its first point.
+  const std::size_t n = p.size();
+  EXPECT_EQ(both.first[n - 1], n - 3);
+  EXPECT_EQ(both.first[n - 2], n - 3);
+  std::size_t repeats = 0;
+  for (std::size_t k = 0; k < n; ++k) repeats += both.first[k] != k;
+  EXPECT_EQ(repeats, 352u);
 }
 
 }  // namespace
