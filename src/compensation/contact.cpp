@@ -17,7 +17,10 @@ std::vector<ContactPoint> contact_points(const nurbs::Surface& centre_surface, i
     c.status = r.status;
     c.centre = raw_centres[k];
     if (!r.ok()) return;
-    const nurbs::UnitNormal n = nurbs::unit_normal(centre_surface, r.u, r.v);
+    // Newton's own tangents where it gives them: one evaluation fewer a point.
+    const bool tangents = !(r.Su.isZero() && r.Sv.isZero());
+    const nurbs::UnitNormal n = tangents ? nurbs::unit_normal(centre_surface, r.u, r.v, r.Su, r.Sv)
+                                         : nurbs::unit_normal(centre_surface, r.u, r.v);
     if (n.status == nurbs::UnitNormal::Status::Degenerate) {
       c.status = nurbs::ClosestPointStatus::NumericalError;
       return;
