@@ -57,6 +57,8 @@ std::vector<std::uint32_t> nearest_others_in(const PointTree* tree, std::span<co
       for (std::size_t i = 0; i < found && j < m; ++i) {
         if (i != skip) out[k * m + j++] = index[i];
       }
+      // A point whose search found nothing but itself (a non-finite one) lists itself, as a point alone does.
+      if (j == 0) out[k * m + j++] = static_cast<std::uint32_t>(k);
       for (; j < m; ++j) out[k * m + j] = out[k * m + j - 1];
       if (within != nullptr) {
         for (std::size_t i = 0; i < knn.size(); ++i) {

@@ -24,10 +24,14 @@ double median_in_place(std::span<double> values) {
 }
 
 double robust_scale(std::span<const double> residuals, double min_scale) {
+  std::vector<double> a(residuals.begin(), residuals.end());
+  return robust_scale_in_place(a, min_scale);
+}
+
+double robust_scale_in_place(std::span<double> residuals, double min_scale) {
   if (residuals.empty()) return min_scale;
-  std::vector<double> a(residuals.size());
-  std::transform(residuals.begin(), residuals.end(), a.begin(), [](double r) { return std::abs(r); });
-  return std::max(kMadToSigma * upper_median_in_place(a), min_scale);
+  for (double& r : residuals) r = std::abs(r);
+  return std::max(kMadToSigma * upper_median_in_place(residuals), min_scale);
 }
 
 }  // namespace probecomp::geometry

@@ -190,7 +190,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
     for (std::size_t i = 0; i < n; ++i) {
       if (use[i]) used_r.push_back(r[i]);
     }
-    scale = geometry::robust_scale(used_r, options.robust.min_scale);
+    scale = geometry::robust_scale_in_place(used_r, options.robust.min_scale);  // used_r is rebuilt at every call
     for (std::size_t i = 0; i < n; ++i) w[i] = use[i] ? robust_weight(options.robust.loss, r[i], scale) : 0.0;
     return used_r.size();
   };

@@ -64,6 +64,7 @@ TEST(NearestOtherAndFirst, EqualsBothFunctionsApart) {
   p.push_back({100 + 1.2e-9, 0, 0});
   const NearestAndFirst both = nearest_other_and_first(p, 1e-9);
   EXPECT_EQ(both.nearest, nearest_others(p, 1));
+  EXPECT_EQ(both.nearest[3350], 3350u);  // the non-finite point lists itself
   EXPECT_EQ(both.first, first_at_same_position(p, 1e-9));
   // The chain at x = 100 is one group, named by its first point.
   const std::size_t n = p.size();

@@ -12,7 +12,7 @@ namespace probecomp::geometry {
 
 // Point k's `count` nearest other points, nearest first, at [k·count, (k + 1)·count). A duplicate of a point counts
 // as another point (its own measurement). Fewer points than count + 1: the lists repeat the farthest available
-// point (a point alone lists itself). Parallel, deterministic.
+// point (a point alone, or one with a non-finite coordinate, lists itself). Parallel, deterministic.
 [[nodiscard]] std::vector<std::uint32_t> nearest_others(std::span<const Point3> points, int count);
 
 // For each point, the index of the first point (lowest index) within `tolerance` (mm) of it: itself unless it

@@ -19,5 +19,8 @@ inline constexpr double kMadToSigma = 1.4826;
 
 // 1.4826 · upper median |r| over the residuals, but at least `min_scale`; `min_scale` when there are none.
 [[nodiscard]] double robust_scale(std::span<const double> residuals, double min_scale);
+// The same computed in `residuals` itself (left reordered, in absolute value): no copy of a million residuals at
+// every ICP step.
+[[nodiscard]] double robust_scale_in_place(std::span<double> residuals, double min_scale);
 
 }  // namespace probecomp::geometry
