@@ -460,7 +460,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     if (!m.ok() || !raw[k].allFinite()) continue;
     FaceFit& ff = by_face[m.face];
     ++ff.report.points;
-    if (member(k)) ff.members.push_back(k);
+    if (member(k)) ff.members.push_back(static_cast<std::uint32_t>(k));
   }
 
   std::size_t done = 0;
@@ -473,7 +473,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     rep.material = prepared.material[static_cast<std::size_t>(f)].source;
     // A face that had no points nearest to it before registration kept the file's orientation.
     if (rep.material == cad::MaterialSource::NoPoints) rep.material = cad::MaterialSource::File;
-    const std::vector<std::size_t>& members = ff.members;
+    const std::vector<std::uint32_t>& members = ff.members;
     const nurbs::Surface start = fit_start(prepared.offset->model.faces[static_cast<std::size_t>(f)].surface, T);
     // The members' centres as the smallest tip's would be: a larger tip's moved in by the difference along the
     // registered nominal normal, and once there is a fit, along the fit's own (see the refits below).
@@ -495,7 +495,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     const std::vector<std::uint32_t>& first = around.first;
     std::vector<std::uint32_t> position(members.size());  // member → its position among the fitted points
     std::vector<Point3> pts;
-    std::vector<std::size_t> fitted_point;  // fitted point → its input index
+    std::vector<std::uint32_t> fitted_point;  // fitted point → its input index
     std::vector<fitting::SurfaceParameter> params;
     pts.reserve(members.size());
     fitted_point.reserve(members.size());
@@ -646,7 +646,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
   for (const FaceFit& ff : fits.faces) {
     if (!ff.report.fitted) continue;
     const cad::Face& face = work.faces[static_cast<std::size_t>(ff.face)];
-    const std::vector<std::size_t>& members = ff.members;
+    const std::vector<std::uint32_t>& members = ff.members;
     // The fit is of the smallest tip's centre surface: each member's centre moved onto it along the fit's normal.
     // In blocks, so that a face of a million points holds the contacts of a block at a time (96 bytes a point).
     constexpr std::size_t kBlock = 1 << 16;
@@ -777,6 +777,8 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   const geometry::TipRadii radii = tip_radii(options, raw.size());
   check_model_and_radii(model, radii, raw.size());
   if (raw.empty()) throw InputError("no points to compensate");
+  // Points are indexed with 32 bits (the fit's members, the k-d trees).
+  if (raw.size() > std::numeric_limits<std::uint32_t>::max()) throw InputError("more than 4 294 967 295 points");
   if (approach_normals && approach_normals->size() != raw.size()) {
     throw InputError("the approach normals do not match the points in number");
   }

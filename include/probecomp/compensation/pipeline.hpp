@@ -11,6 +11,7 @@
 // compensate() composes them; the conventional method (c − r·(i,j,k), registered to the nominal) has one step.
 // Every input point comes back, in order, with a status saying whether it can be trusted.
 
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -171,7 +172,7 @@ struct FitOptions {
 // One face's points and its fit.
 struct FaceFit {
   int face = -1;                                   // position in the prepared model's faces
-  std::vector<std::size_t> members;                // input indices of the points fitted on it, ascending
+  std::vector<std::uint32_t> members;              // input indices of the points fitted on it, ascending (4 B each)
   std::vector<fitting::SurfaceParameter> params;   // theirs: on the fit when fitted, else the registration's
   std::vector<char> trusted;                       // per member: 0 where left out as an outlier
   std::optional<fitting::AdaptiveFitResult> fit;   // when the face was fitted
