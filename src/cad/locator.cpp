@@ -190,6 +190,21 @@ ClosestPointResult TrimmedFaceLocator::closest_point_on_boundary(const Point3& q
 ClosestPointResult TrimmedFaceLocator::closest_point(const Point3& query, double limit, bool& on_trim_edge,
                                                      const ClosestPointResult* known) const {
   on_trim_edge = false;
+  if (face_->analytic) {
+    // The closed form gives the one minimum over the whole domain (the elementary surfaces have no other local
+    // minimum of the distance: the other critical points are maxima or saddles). Inside the trim it is the
+    // face's closest point; outside, the face's closest point lies on the trim's boundary.
+    ClosestPointResult none;
+    none.u = none.v = std::numeric_limits<double>::quiet_NaN();
+    none.distance = limit;
+    const ClosestPointResult r = face_->analytic->closest_point(query);
+    if (!(r.distance < limit)) return none;
+    if (!face_->trimmed() || face_->trim->contains(r.u, r.v)) return r;
+    const ClosestPointResult edge = closest_point_on_boundary(query, limit);
+    if (!(edge.distance < limit)) return none;
+    on_trim_edge = true;
+    return edge;
+  }
   // The limit enters the surface search as a bound that is not a point (u is NaN): cells farther are skipped.
   ClosestPointResult bound;
   bound.u = bound.v = std::numeric_limits<double>::quiet_NaN();
@@ -374,12 +389,14 @@ ModelPoint ModelLocator::closest_point(const Point3& query, const ModelPoint& hi
     return closest_point(query);
   }
   const Face& face = model_->faces[static_cast<std::size_t>(hint.face)];
-  const ClosestPointResult local = nurbs::refine_closest_point(face.surface, query, hint.u, hint.v);
+  // An elementary face's closed form is its global minimum: inside the trim, nothing on the face is nearer.
+  const ClosestPointResult local = face.analytic ? face.analytic->closest_point(query)
+                                                 : nurbs::refine_closest_point(face.surface, query, hint.u, hint.v);
   if (!local.ok() || (face.trimmed() && !face.trim->contains(local.u, local.v))) return closest_point(query);
   // The local foot point bounds the answer. Its own face is searched again for anything strictly nearer
   // (another minimum, or its trim boundary), then every other face the hierarchy cannot rule out.
   ModelPoint best = make_point(query, hint.face, local, false);
-  if (mode == HintedSearch::Exact) visit_face(query, hint.face, best, &local);
+  if (mode == HintedSearch::Exact && !face.analytic) visit_face(query, hint.face, best, &local);
   search(query, best, hint.face);
   return best;
 }

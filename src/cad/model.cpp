@@ -12,6 +12,11 @@
 #include <Geom2d_BSplineCurve.hxx>
 #include <Geom2d_TrimmedCurve.hxx>
 #include <Geom_BSplineSurface.hxx>
+#include <gp_Cone.hxx>
+#include <gp_Cylinder.hxx>
+#include <gp_Pln.hxx>
+#include <gp_Sphere.hxx>
+#include <gp_Torus.hxx>
 #include <IGESControl_Controller.hxx>
 #include <IGESControl_Reader.hxx>
 #include <IGESControl_Writer.hxx>
@@ -44,6 +49,7 @@
 #include <cctype>
 #include <fstream>
 #include <mutex>
+#include <optional>
 
 #include "probecomp/occt/convert.hpp"
 
@@ -161,6 +167,57 @@ std::string surface_type(const TopoDS_Face& face) {
     case GeomAbs_SurfaceOfExtrusion: return "extrusion";
     case GeomAbs_OffsetSurface: return "offset";
     default: return "other";
+  }
+}
+
+Vector3 to_vector(const gp_Dir& d) { return {d.X(), d.Y(), d.Z()}; }
+
+// The face's surface in closed form, as the file gives it (with the face's location applied), for the elementary
+// types; none for others.
+std::optional<ElementarySurface> elementary_surface(const TopoDS_Face& face) {
+  const Handle(Geom_Surface) s = BRep_Tool::Surface(face);
+  if (s.IsNull()) return std::nullopt;
+  const GeomAdaptor_Surface adaptor(s);
+  ElementarySurface e;
+  auto set_frame = [&e](const gp_Ax3& frame) {
+    e.origin = Point3(frame.Location().X(), frame.Location().Y(), frame.Location().Z());
+    e.x = to_vector(frame.XDirection());
+    e.y = to_vector(frame.YDirection());
+    e.z = to_vector(frame.Direction());
+  };
+  switch (adaptor.GetType()) {
+    case GeomAbs_Plane: e.kind = ElementaryKind::Plane; set_frame(adaptor.Plane().Position()); return e;
+    case GeomAbs_Cylinder: {
+      const gp_Cylinder c = adaptor.Cylinder();
+      e.kind = ElementaryKind::Cylinder;
+      set_frame(c.Position());
+      e.radius = c.Radius();
+      return e;
+    }
+    case GeomAbs_Cone: {
+      const gp_Cone c = adaptor.Cone();
+      e.kind = ElementaryKind::Cone;
+      set_frame(c.Position());
+      e.radius = c.RefRadius();
+      e.half_angle = c.SemiAngle();
+      return e;
+    }
+    case GeomAbs_Sphere: {
+      const gp_Sphere c = adaptor.Sphere();
+      e.kind = ElementaryKind::Sphere;
+      set_frame(c.Position());
+      e.radius = c.Radius();
+      return e;
+    }
+    case GeomAbs_Torus: {
+      const gp_Torus c = adaptor.Torus();
+      e.kind = ElementaryKind::Torus;
+      set_frame(c.Position());
+      e.radius = c.MajorRadius();
+      e.minor_radius = c.MinorRadius();
+      return e;
+    }
+    default: return std::nullopt;
   }
 }
 
@@ -323,6 +380,7 @@ Model read_model(const std::filesystem::path& path) {
       face.exact = type != "offset" && type != "other";
       face.outward = original.Orientation() == TopAbs_REVERSED ? -1 : 1;
       face.material_known = solid_faces.Contains(original);
+      if (const std::optional<ElementarySurface> e = elementary_surface(original)) face.analytic = make_analytic_face(*e, face.surface);
       model.faces.push_back(std::move(face));
     }
   } catch (const Standard_Failure& e) {

@@ -25,6 +25,18 @@ OffsetModel offset_model(const Model& model, double d, const fitting::OffsetOpti
     // Offset faces are approximations to the tolerance, like OpenCASCADE's conversions of procedural surfaces.
     face.exact = false;
     face.source_type = "offset " + face.source_type;
+    // An elementary face's offset is elementary again, exactly; the offset NURBS approximates it to its deviation,
+    // so the check that both describe one surface at the same parameters is that loose (the normals' 1e-3 rad
+    // catches a wrong side or map, not the fit's own error).
+    if (face.analytic) {
+      const std::optional<AnalyticFace> exact = face.analytic->offset(d * face.outward);
+      face.analytic = nullptr;
+      if (exact && results[k]->status != fitting::OffsetResult::Status::Degenerate) {
+        const AnalyticFace::Check check = exact->compare(face.surface);
+        const double allowed = 2.0 * std::max(options.tolerance, results[k]->deviation) + kAnalyticMatch;
+        if (check.distance <= allowed && check.normal_angle <= 1e-3) face.analytic = std::make_shared<const AnalyticFace>(*exact);
+      }
+    }
     out.faces.push_back(std::move(*results[k]));
   }
   return out;

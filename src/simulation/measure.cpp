@@ -123,6 +123,7 @@ cad::Model actual_model(const cad::Model& nominal, const Deformation& deformatio
   cad::Model out = nominal;
   for (cad::Face& face : out.faces) {
     face.surface = nurbs::transformed(deformed_surface(face.surface, face.outward, deformation), placement);
+    face.analytic = nullptr;  // deformed, the face is no longer the file's plane or cylinder
   }
   return out;
 }

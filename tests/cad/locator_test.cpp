@@ -103,7 +103,7 @@ TEST_P(ProjectOnCadFile, EqualsOpenCascadeExhaustiveDistanceInsideTrims) {
 }
 INSTANTIATE_TEST_SUITE_P(CadFiles, ProjectOnCadFile,
                          ::testing::Values("asitus_wavy-cube.stp", "gismo_hammer.iges", "iges_spec_surf128.igs",
-                                           "iges_spec_nentity.igs"),
+                                           "iges_spec_nentity.igs", "asitus_repatch-hpdc.stp"),
                          [](const auto& info) {
                            std::string n = info.param;
                            for (char& c : n) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';

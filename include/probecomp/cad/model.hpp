@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "probecomp/cad/analytic.hpp"
 #include "probecomp/cad/trim.hpp"
 #include "probecomp/error.hpp"
 #include "probecomp/nurbs/surface.hpp"
@@ -27,6 +28,10 @@ struct Face {
   // The NURBS is the file's surface exactly (B-spline, Bézier and analytic faces); offset and other procedural
   // surfaces are approximated by OpenCASCADE's conversion, to about its tolerance (1e-6 mm order).
   bool exact = true;
+  // The file's plane, cylinder, cone, sphere or torus in closed form, where its map to `surface` checks out;
+  // null for other faces. Closest points on the face then come from it, so code that changes `surface` (moves or
+  // deforms the face) must change or drop this too.
+  std::shared_ptr<const AnalyticFace> analytic = nullptr;
 
   [[nodiscard]] bool trimmed() const { return trim != nullptr; }
 };
