@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (fuzz/, clang with AddressSanitizer and UndefinedBehaviorSanitizer) in build-fuzz/ and
+# runs each for SECONDS (default 30) from its seed corpus: fuzz/corpus/TARGET, plus the CAD files for the CAD
+# targets and the QIF sample for the QIF one. Exits non-zero if any target crashes, leaks or trips a sanitizer;
+# libFuzzer leaves the input as build-fuzz/findings/crash-* (keep it as a regression test). Prints the executions of
+# each target.
+#   scripts/fuzz.sh [SECONDS]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-30}
+./scripts/setup.sh --fuzz
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPROBECOMP_FUZZ=ON \
+  -DPROBECOMP_BUILD_TESTS=OFF -DPROBECOMP_BUILD_BENCH=OFF -DPROBECOMP_BUILD_PYTHON=OFF >/dev/null
+cmake --build build-fuzz -j"$(nproc)"
+
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"
+export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp:print_suppressions=0}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+mkdir -p build-fuzz/findings
+failed=0
+for target in points_csv points_dmis points_qif transform cad_step cad_iges; do
+  # The working corpus grows in build-fuzz/corpus; the seeds in the source tree are only read.
+  work="build-fuzz/corpus/$target"
+  mkdir -p "$work"
+  seeds=()
+  [ -d "fuzz/corpus/$target" ] && seeds+=("fuzz/corpus/$target")
+  case $target in
+    points_qif) mkdir -p build-fuzz/seeds/qif && cp tests/data/cad/*.QIF build-fuzz/seeds/qif/ && seeds+=(build-fuzz/seeds/qif) ;;
+    cad_step) mkdir -p build-fuzz/seeds/step && cp tests/data/cad/asitus_wavy-cube.stp build-fuzz/seeds/step/ && seeds+=(build-fuzz/seeds/step) ;;
+    cad_iges) mkdir -p build-fuzz/seeds/iges && cp tests/data/cad/iges_spec_surf128.igs build-fuzz/seeds/iges/ && seeds+=(build-fuzz/seeds/iges) ;;
+  esac
+  log="build-fuzz/findings/$target.log"
+  # -max_len: the CAD seeds are tens of kB; the rest stay small so that mutations stay near the grammar.
+  max_len=4096
+  case $target in cad_*|points_qif) max_len=65536 ;; esac
+  if "build-fuzz/fuzz/fuzz_$target" "$work" "${seeds[@]}" -max_total_time="$seconds" -max_len="$max_len" \
+       -artifact_prefix="build-fuzz/findings/$target-" -print_final_stats=1 >"$log" 2>&1; then
+    runs=$(grep -m1 -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' || echo '?')
+    echo "fuzz_$target: ok, $runs executions in ${seconds} s"
+  else
+    echo "fuzz_$target: FAILED (see $log)"
+    tail -20 "$log"
+    failed=1
+  fi
+done
+exit $failed
