@@ -24,11 +24,16 @@ for target in points_csv points_dmis points_qif transform cad_step cad_iges; do
   mkdir -p "$work"
   seeds=()
   [ -d "fuzz/corpus/$target" ] && seeds+=("fuzz/corpus/$target")
+  # Test files as further seeds, copied into a folder of their own (libFuzzer takes folders as corpora).
   case $target in
-    points_qif) mkdir -p build-fuzz/seeds/qif && cp tests/data/cad/*.QIF build-fuzz/seeds/qif/ && seeds+=(build-fuzz/seeds/qif) ;;
-    cad_step) mkdir -p build-fuzz/seeds/step && cp tests/data/cad/asitus_wavy-cube.stp build-fuzz/seeds/step/ && seeds+=(build-fuzz/seeds/step) ;;
-    cad_iges) mkdir -p build-fuzz/seeds/iges && cp tests/data/cad/iges_spec_surf128.igs build-fuzz/seeds/iges/ && seeds+=(build-fuzz/seeds/iges) ;;
+    points_qif) files=(tests/data/cad/*.QIF) ;;
+    cad_step) files=(tests/data/cad/asitus_wavy-cube.stp) ;;
+    cad_iges) files=(tests/data/cad/iges_spec_surf128.igs) ;;
+    *) files=() ;;
   esac
+  if [ ${#files[@]} -gt 0 ]; then
+    mkdir -p "build-fuzz/seeds/$target" && cp "${files[@]}" "build-fuzz/seeds/$target/" && seeds+=("build-fuzz/seeds/$target")
+  fi
   log="build-fuzz/findings/$target.log"
   # -max_len: the CAD seeds are tens of kB; the rest stay small so that mutations stay near the grammar.
   max_len=4096

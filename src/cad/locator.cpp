@@ -28,6 +28,15 @@ struct CurvePoint {
   Point3 S;
 };
 
+// "Nothing on this face nearer than `limit`": a result that is not a point (u is NaN, TrimmedFaceLocator::none_nearer)
+// at that distance, which the surface search also takes as its bound (cells farther are skipped).
+ClosestPointResult none_nearer_than(double limit) {
+  ClosestPointResult none;
+  none.u = none.v = std::numeric_limits<double>::quiet_NaN();
+  none.distance = limit;
+  return none;
+}
+
 CurvePoint at(const nurbs::Surface& s, const nurbs::Curve& c, const Point3& q, double t) {
   const Point3 uv = nurbs::evaluate(c, t);
   const Point3 S = nurbs::evaluate(s, uv.x(), uv.y());
@@ -194,21 +203,15 @@ ClosestPointResult TrimmedFaceLocator::closest_point(const Point3& query, double
     // The closed form gives the one minimum over the whole domain (the elementary surfaces have no other local
     // minimum of the distance: the other critical points are maxima or saddles). Inside the trim it is the
     // face's closest point; outside, the face's closest point lies on the trim's boundary.
-    ClosestPointResult none;
-    none.u = none.v = std::numeric_limits<double>::quiet_NaN();
-    none.distance = limit;
     const ClosestPointResult r = face_->analytic->closest_point(query);
-    if (!(r.distance < limit)) return none;
+    if (!(r.distance < limit)) return none_nearer_than(limit);
     if (!face_->trimmed() || face_->trim->contains(r.u, r.v)) return r;
     const ClosestPointResult edge = closest_point_on_boundary(query, limit);
-    if (!(edge.distance < limit)) return none;
+    if (!(edge.distance < limit)) return none_nearer_than(limit);
     on_trim_edge = true;
     return edge;
   }
-  // The limit enters the surface search as a bound that is not a point (u is NaN): cells farther are skipped.
-  ClosestPointResult bound;
-  bound.u = bound.v = std::numeric_limits<double>::quiet_NaN();
-  bound.distance = limit;
+  ClosestPointResult bound = none_nearer_than(limit);
   if (face_->trimmed()) {
     const ClosestPointResult edge = closest_point_on_boundary(query, limit);
     if (edge.distance < limit) bound = edge;
