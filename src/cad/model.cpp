@@ -26,12 +26,16 @@
 #include <IGESData_IGESWriter.hxx>
 #include <IGESData_Protocol.hxx>
 #include <IGESSelect_WorkLibrary.hxx>
+#include <Interface_Check.hxx>
+#include <Interface_InterfaceModel.hxx>
+#include <Interface_ReportEntity.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <Precision.hxx>
 #include <STEPControl_Reader.hxx>
 #include <STEPControl_Writer.hxx>
+#include <Standard_ErrorHandler.hxx>
 #include <Standard_Failure.hxx>
 #include <StepRepr_RepresentationItem.hxx>
 #include <TColStd_SequenceOfAsciiString.hxx>
@@ -42,6 +46,7 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 #include <TopoDS_Face.hxx>
+#include <XSControl_Reader.hxx>
 #include <XSControl_TransferReader.hxx>
 #include <XSControl_WorkSession.hxx>
 
@@ -52,6 +57,7 @@
 #include <optional>
 
 #include "probecomp/occt/convert.hpp"
+#include "probecomp/occt/crash_guard.hpp"
 
 namespace probecomp::cad {
 
@@ -325,6 +331,70 @@ void configure_exchange() {
   });
 }
 
+// What the exchange reader gives back: the shape, the transfer record (for face names) and the file's length unit.
+struct ExchangeRead {
+  TopoDS_Shape shape;
+  Handle(XSControl_TransferReader) transfer;
+  std::string file_units;
+  std::vector<std::string> warnings;
+};
+
+// OpenCASCADE reads past entities it cannot parse (a broken reference, a wrong type) and leaves them out of
+// the shape; that must not go unsaid. Files from real systems have such errors too (tail_section has four
+// angle units), so it is a warning, not a refusal: the faces read are checked as any others.
+std::vector<std::string> entity_errors(const Interface_InterfaceModel& file) {
+  int errors = 0;
+  std::string first;
+  for (int i = 1; i <= file.NbEntities(); ++i) {
+    if (!file.IsErrorEntity(i)) continue;
+    if (errors++ > 0) continue;
+    const Handle(Interface_ReportEntity) report = file.ReportEntity(i);
+    const Handle(Interface_Check) check = report->Check();
+    const Handle(TCollection_HAsciiString) label = file.StringLabel(report->Concerned());
+    first = std::string(label.IsNull() ? "?" : label->ToCString()) + " " + file.TypeName(report->Concerned());
+    if (check->NbFails() > 0) first += ": " + std::string(check->CFail(1));
+  }
+  std::vector<std::string> out;
+  if (errors > 0) {
+    out.push_back("OpenCASCADE found errors in " + std::to_string(errors) + " of the file's " +
+                  std::to_string(file.NbEntities()) + " entities and left them out (first: " + first + ")");
+  }
+  if (file.GlobalCheck()->HasFailed()) {
+    out.push_back(std::string("OpenCASCADE found the file malformed: ") + file.GlobalCheck()->CFail(1));
+  }
+  return out;
+}
+
+ExchangeRead read_exchange_file(const std::filesystem::path& path, Format format) {
+  ExchangeRead out;
+  // The readers live outside the try so that a crash turned into a Standard_Failure (occt::CrashGuard, which
+  // jumps back to OCC_CATCH_SIGNALS and throws there) still destroys them.
+  std::optional<STEPControl_Reader> step;
+  std::optional<IGESControl_Reader> iges;
+  if (format == Format::Step) step.emplace(); else iges.emplace();
+  XSControl_Reader& reader = step ? static_cast<XSControl_Reader&>(*step) : *iges;
+  try {
+    OCC_CATCH_SIGNALS
+    if (reader.ReadFile(path.c_str()) != IFSelect_RetDone) {
+      fail(path, format == Format::Step ? "OpenCASCADE cannot read it as STEP" : "OpenCASCADE cannot read it as IGES");
+    }
+    if (step) {
+      TColStd_SequenceOfAsciiString lengths, angles, solid_angles;
+      step->FileUnits(lengths, angles, solid_angles);
+      out.file_units = lengths.IsEmpty() ? "unknown" : unit_name(lengths.First().ToCString());
+    } else {
+      out.file_units = iges_units(iges->IGESModel()->GlobalSection());
+    }
+    out.warnings = entity_errors(*reader.Model());
+    reader.TransferRoots();
+    out.shape = reader.OneShape();
+    out.transfer = reader.WS()->TransferReader();
+  } catch (const Standard_Failure& e) {
+    fail(path, std::string("OpenCASCADE failed while reading it: ") + e.GetMessageString());
+  }
+  return out;
+}
+
 }  // namespace
 
 Model Model::load(const std::filesystem::path& path) { return read_model(path); }
@@ -334,32 +404,15 @@ Model read_model(const std::filesystem::path& path) {
   check_file_frame(path, format);
   configure_exchange();
   std::lock_guard lock(exchange_mutex());
+  const occt::CrashGuard crash_guard;
 
   Model model;
   model.path = path;
-  TopoDS_Shape shape;
-  Handle(XSControl_TransferReader) transfer;
-  try {
-    if (format == Format::Step) {
-      STEPControl_Reader reader;
-      if (reader.ReadFile(path.c_str()) != IFSelect_RetDone) fail(path, "OpenCASCADE cannot read it as STEP");
-      TColStd_SequenceOfAsciiString lengths, angles, solid_angles;
-      reader.FileUnits(lengths, angles, solid_angles);
-      model.file_units = lengths.IsEmpty() ? "unknown" : unit_name(lengths.First().ToCString());
-      reader.TransferRoots();
-      shape = reader.OneShape();
-      transfer = reader.WS()->TransferReader();
-    } else {
-      IGESControl_Reader reader;
-      if (reader.ReadFile(path.c_str()) != IFSelect_RetDone) fail(path, "OpenCASCADE cannot read it as IGES");
-      model.file_units = iges_units(reader.IGESModel()->GlobalSection());
-      reader.TransferRoots();
-      shape = reader.OneShape();
-      transfer = reader.WS()->TransferReader();
-    }
-  } catch (const Standard_Failure& e) {
-    fail(path, std::string("OpenCASCADE failed while reading it: ") + e.GetMessageString());
-  }
+  ExchangeRead read = read_exchange_file(path, format);
+  model.file_units = std::move(read.file_units);
+  model.read_warnings = std::move(read.warnings);
+  const TopoDS_Shape& shape = read.shape;
+  const Handle(XSControl_TransferReader)& transfer = read.transfer;
   if (shape.IsNull()) fail(path, "no surfaces in the file");
 
   TopTools_IndexedMapOfShape solid_faces;
@@ -370,6 +423,7 @@ Model read_model(const std::filesystem::path& path) {
   if (faces.empty()) fail(path, "no surfaces in the file");
 
   try {
+    OCC_CATCH_SIGNALS
     for (std::size_t k = 0; k < faces.size(); ++k) {
       const TopoDS_Face& original = faces[k];
       const int index = static_cast<int>(k);

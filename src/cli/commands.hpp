@@ -8,11 +8,15 @@
 #include <string>
 #include <vector>
 
+#include "probecomp/cad/model.hpp"
 #include "probecomp/simulation/measure.hpp"
 #include "probecomp/studies/freeform_study.hpp"
 #include "probecomp/studies/registration_study.hpp"
 
 namespace probecomp::cli {
+
+// cad::read_model, and on standard error a warning for each thing the reader left out (Model::read_warnings).
+[[nodiscard]] cad::Model read_part(const std::string& path);
 
 struct CompensateArgs {
   std::string cad, points, output, json, report, method = "cad";

@@ -55,8 +55,18 @@ void emit(const std::string& output, const std::string& text) {
   file.commit();
 }
 
+}  // namespace
+
+probecomp::cad::Model probecomp::cli::read_part(const std::string& path) {
+  cad::Model model = cad::read_model(path);
+  for (const std::string& w : model.read_warnings) std::cerr << "probecomp: warning: " << path << ": " << w << '\n';
+  return model;
+}
+
+namespace {
+
 int run_info(const std::string& part, bool json) {
-  const cad::Model model = cad::read_model(part);
+  const cad::Model model = cli::read_part(part);
   int rational = 0, trimmed = 0, solid = 0;
   for (const cad::Face& f : model.faces) {
     rational += f.surface.is_rational();
@@ -106,7 +116,7 @@ int run_project(const std::string& part, const std::string& points_file, const s
   // Unstated, the unit is the file's own (a "# lengths in UNIT" line), else mm.
   const io::PointTable table = io::read_point_csv(points_file, units.empty() ? std::nullopt : io::length_unit(units));
   const double scale = 1.0 / table.unit.mm;  // mm → the points' unit
-  const cad::Model model = cad::read_model(part);
+  const cad::Model model = cli::read_part(part);
   const cad::ModelLocator locator(model);
   const std::vector<cad::ModelPoint> found = locator.closest_points(table.points);
   std::ostringstream out;
@@ -134,7 +144,7 @@ int run_plan(const std::string& part, double spacing, const std::string& face_li
   io::check_outputs_spare_inputs({{"--output", output}}, {{"PART", part}});
   const bool dmis = output.size() > 4 && (output.ends_with(".dmi") || output.ends_with(".DMI"));
   const std::vector<int> faces = cli::parse_face_list(face_list);
-  const cad::Model model = cad::read_model(part);
+  const cad::Model model = cli::read_part(part);
   const std::vector<cad::PlannedPoint> plan = cad::plan_points(model, spacing, faces);
   if (plan.empty()) throw std::invalid_argument("no points fit on the chosen faces at spacing " + mm(spacing) + " mm");
   // A face that bounds no closed solid has no known material side: its normals follow the file's orientation

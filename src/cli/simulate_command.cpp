@@ -115,7 +115,7 @@ int run_simulate(const SimulateArgs& a) {
          {"--output-dir's raw.csv", dir / "raw.csv"}},
         {{"--cad", a.cad}, {"--plan", a.plan}});
   }
-  const cad::Model nominal = cad::read_model(a.cad);
+  const cad::Model nominal = read_part(a.cad);
   const std::vector<simulation::ProgrammedPoint> plan = programmed_points(a, nominal);
 
   const cad::Model actual = simulation::actual_model(nominal, deformation, placement);

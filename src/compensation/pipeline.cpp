@@ -794,6 +794,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   if (options.method == Method::Conventional) {
     CompensationResult out = compensate_conventional(model, raw, *approach_normals, radii, options);
     out.statistics = statistics(out.points);
+    out.warnings = model.read_warnings;
     registration_warnings(out.registration, out.warnings);
     return out;
   }
@@ -847,6 +848,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
     out.faces.push_back(std::move(rep));
   }
   out.statistics = statistics(out.points);
+  out.warnings.insert(out.warnings.begin(), model.read_warnings.begin(), model.read_warnings.end());
   registration_warnings(out.registration, out.warnings);
   unfitted_face_warnings(out.faces, out.warnings);
   int repeated = 0;

@@ -195,5 +195,48 @@ TEST(CadModelErrors, OneLineNamingTheFileAndCause) {
                "no surfaces");
 }
 
+// Inputs the fuzzer found (scripts/fuzz.sh) that once crashed inside OpenCASCADE (tests/data/fuzz/README.md).
+const std::filesystem::path kFuzzDir = PROBECOMP_TEST_FUZZ_DIR;
+
+TEST(CadModelFuzzFindings, StepWithABrokenPointReferenceReadsWithWarnings) {
+  // Was SIGSEGV in StepGeom_CartesianPoint::NbCoordinates during the transfer. OpenCASCADE now skips the
+  // entity (occt::CrashGuard), and the model says what was left out.
+  const Model model = read_model(kFuzzDir / "cad_step-occt-segv-StepGeom_CartesianPoint-NbCoordinates.stp");
+  ASSERT_FALSE(model.read_warnings.empty());
+  EXPECT_NE(model.read_warnings.front().find("OpenCASCADE found errors in"), std::string::npos)
+      << model.read_warnings.front();
+  for (const std::string& w : model.read_warnings) EXPECT_EQ(w.find('\n'), std::string::npos) << w;
+}
+
+TEST(CadModelFuzzFindings, IgesWithABrokenParameterIsRefused) {
+  // Was a wild read in OpenCASCADE's IGES parser (iges_newparam), seen by AddressSanitizer. What the parser
+  // then makes of the file depends on memory it should not read ("cannot read it as IGES" after other IGES
+  // reads in the process, "no surfaces" in a fresh one); either way a one-line refusal naming the file.
+  const std::filesystem::path p = kFuzzDir / "cad_iges-occt-segv-iges_newparam.igs";
+  const std::string message = error_of(p);
+  EXPECT_EQ(message.rfind(p.string() + ": ", 0), 0u) << message;
+  EXPECT_TRUE(message.find("no surfaces") != std::string::npos || message.find("cannot read it") != std::string::npos)
+      << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+}
+
+TEST(CadModelReadWarnings, NoneForACleanFileAndTheFilesOwnErrorsOtherwise) {
+  EXPECT_TRUE(read_model(kCadDir / "asitus_wavy-cube.stp").read_warnings.empty());
+  // tail_section declares its degree unit four times as CONVERSION_BASED_UNIT with NAMED_UNIT(*), which
+  // OpenCASCADE's schema refuses (dimensions must be an entity): counted here from the file's text.
+  std::ifstream in(kCadDir / "asitus_tail_section_asm.stp", std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  int declared = 0;
+  for (std::size_t at = text.find("CONVERSION_BASED_UNIT('DEGREE'"); at != std::string::npos;
+       at = text.find("CONVERSION_BASED_UNIT('DEGREE'", at + 1)) {
+    ++declared;
+  }
+  ASSERT_EQ(declared, 4);
+  const Model model = read_model(kCadDir / "asitus_tail_section_asm.stp");
+  ASSERT_EQ(model.read_warnings.size(), 1u);
+  EXPECT_NE(model.read_warnings[0].find("errors in 4 of the file's"), std::string::npos) << model.read_warnings[0];
+  EXPECT_NE(model.read_warnings[0].find("CONVERSION_BASED_UNIT"), std::string::npos) << model.read_warnings[0];
+}
+
 }  // namespace
 }  // namespace probecomp::cad

@@ -183,6 +183,10 @@ def test_errors_raise_the_librarys_kinds_with_the_clis_messages(demo, work):
 
     with pytest.raises(probecomp.CadError, match="no-such-part.stp: no such file"):
         probecomp.CadModel(str(work / "no-such-part.stp"))
+    assert model.read_warnings == []
+    # Four angle units this file declares in a form OpenCASCADE refuses (tests/cad/model_test.cpp counts them).
+    tail = probecomp.CadModel(os.path.join(CAD_DIR, "asitus_tail_section_asm.stp"))
+    assert len(tail.read_warnings) == 1 and "errors in 4 of the file's" in tail.read_warnings[0]
     with pytest.raises(probecomp.InputError, match="probe radius"):
         probecomp.compensate(model, raw.points, -1.0)
     with pytest.raises(probecomp.InputError, match="needs each point's approach normal"):

@@ -40,6 +40,9 @@ struct Model {
   std::filesystem::path path;
   std::string file_units;  // the length unit the file declares ("mm", "inch", ...); geometry here is in mm
   std::vector<Face> faces;
+  // What the reader had to leave out (entities OpenCASCADE could not parse), one line each; empty for a
+  // clean file. Whoever reports on a model passes these on as warnings.
+  std::vector<std::string> read_warnings;
 
   // Reads .stp/.step or .igs/.iges (chosen by extension, case-insensitive). Throws CadError for a missing,
   // unreadable or truncated file, a file that is not STEP/IGES, or one without surfaces.
