@@ -52,12 +52,15 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <mutex>
 #include <optional>
 
 #include "probecomp/occt/convert.hpp"
 #include "probecomp/occt/crash_guard.hpp"
+#include "probecomp/temporary_files.hpp"
 
 namespace probecomp::cad {
 
@@ -451,7 +454,9 @@ void write_surfaces(const std::filesystem::path& path, const std::vector<nurbs::
   std::lock_guard lock(exchange_mutex());
   std::filesystem::path tmp = path;
   tmp += ".partial";
+  const TemporaryFile interrupt_removes(tmp);
   bool ok = false;
+  errno = 0;
   try {
     if (format == Format::Iges) {
       IGESControl_Writer writer("MM", 0);
@@ -478,10 +483,11 @@ void write_surfaces(const std::filesystem::path& path, const std::vector<nurbs::
   } catch (const Standard_Failure& e) {
     ok = false;
   }
+  const int reason = errno;  // of the failing open(2) or write(2), if that is what failed
   std::error_code ec;
   if (!ok) {
     std::filesystem::remove(tmp, ec);
-    fail(path, "could not be written");
+    fail(path, std::string("could not be written") + (reason != 0 ? std::string(" (") + std::strerror(reason) + ")" : ""));
   }
   std::filesystem::rename(tmp, path, ec);
   if (ec) {

@@ -134,11 +134,8 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
   if (!a.tolerance.empty()) tolerance = io::parse_tolerance(a.tolerance);
   io::OutputFiles files;
   if (!a.output.empty() && !qif && !dmis) {
-    files.add(a.output, [&](const std::filesystem::path& temporary) {
-      std::ofstream out(temporary, std::ios::binary);
+    files.add_streamed(a.output, [&](std::ostream& out) {
       io::write_compensated_csv(out, l.table, r, [&](double f) { bar.update("writing", 1.0 - kWriteShare * (1.0 - f)); });
-      out.flush();
-      if (!out) throw InputError(a.output + ": cannot be written");
     });
   } else if (!a.output.empty()) {
     files.add(a.output, text);

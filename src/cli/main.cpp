@@ -25,6 +25,7 @@
 #include "probecomp/io/output_files.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/error.hpp"
+#include "probecomp/temporary_files.hpp"
 #include "probecomp/version.hpp"
 
 namespace {
@@ -210,6 +211,8 @@ int main(int argc, char** argv) {
   // heaps, where freed room is kept: a million points then peaked anywhere from 370 to 460 MB, run to run.
   mallopt(M_MMAP_THRESHOLD, 1 << 20);
 #endif
+  // Ctrl-C or a job scheduler's SIGTERM: no half-written output left behind.
+  probecomp::remove_temporaries_on_termination();
   CLI::App app{
       "probecomp: CAD-based contact-probe radius compensation for CMM data.\n"
       "Turns raw probe-centre points into contact points and deviations using the part's NURBS model.",

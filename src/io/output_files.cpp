@@ -1,5 +1,7 @@
 #include "probecomp/io/output_files.hpp"
 
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <stdexcept>
 #include <system_error>
@@ -59,22 +61,36 @@ OutputFiles::~OutputFiles() {
 }
 
 void OutputFiles::add(const std::filesystem::path& destination, const std::string& text) {
+  add_streamed(destination, [&](std::ostream& out) { out << text; });
+}
+
+void OutputFiles::add_streamed(const std::filesystem::path& destination, const std::function<void(std::ostream&)>& write) {
   add(destination, [&](const std::filesystem::path& temporary) {
+    // errno is what the failing open(2) or write(2) left: the reason a user can act on (no space, read-only).
+    const auto cannot = [&] {
+      const int reason = errno;
+      return InputError(destination.string() + ": cannot be written" +
+                        (reason != 0 ? " (" + std::string(std::strerror(reason)) + ")" : std::string()));
+    };
+    errno = 0;
     std::ofstream out(temporary, std::ios::binary);
-    out << text;
+    if (!out) throw cannot();
+    write(out);
     out.flush();
-    if (!out) throw InputError(destination.string() + ": cannot be written");
+    if (!out) throw cannot();
   });
 }
 
 void OutputFiles::add(const std::filesystem::path& destination,
                       const std::function<void(const std::filesystem::path&)>& write) {
   const std::filesystem::path temporary = temporary_for(destination);
-  staged_.push_back({destination, temporary});  // registered first, so that a failed write's remains are removed
+  // Registered first, so that a failed or interrupted write's remains are removed.
+  staged_.push_back({destination, temporary, TemporaryFile(temporary)});
   write(temporary);
 }
 
 void OutputFiles::commit() {
+  const DeferTermination all_or_none;
   std::error_code ec;
   for (std::size_t k = 0; k < staged_.size(); ++k) {
     std::filesystem::rename(staged_[k].temporary, staged_[k].destination, ec);

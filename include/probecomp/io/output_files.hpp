@@ -7,8 +7,11 @@
 
 #include <filesystem>
 #include <functional>
+#include <ostream>
 #include <string>
 #include <vector>
+
+#include "probecomp/temporary_files.hpp"
 
 namespace probecomp::io {
 
@@ -33,16 +36,22 @@ class OutputFiles {
 
   // Writes `text` to the destination's temporary file now; throws InputError naming the destination if it cannot.
   void add(const std::filesystem::path& destination, const std::string& text);
+  // The same for a writer that streams (a million rows need not be one string first): `write` is given the
+  // temporary file's stream; a failure to open, write or flush it (a full disk, a read-only directory) is an
+  // InputError naming the destination and the system's reason.
+  void add_streamed(const std::filesystem::path& destination, const std::function<void(std::ostream&)>& write);
   // The same for a file written by another writer (e.g. cad::write_surfaces): `write` is given the temporary
   // path, which keeps the destination's extension.
   void add(const std::filesystem::path& destination, const std::function<void(const std::filesystem::path&)>& write);
-  // Renames every temporary file to its destination, in the order added. (A rename that fails midway, which
+  // Renames every temporary file to its destination, in the order added, with termination signals held until
+  // the last is in place (DeferTermination). (A rename that fails midway, which
   // needs the file system to change under the run, leaves the earlier destinations replaced; it is reported.)
   void commit();
 
  private:
   struct Staged {
     std::filesystem::path destination, temporary;
+    TemporaryFile interrupt_removes;  // the temporary, removed by SIGINT/SIGTERM before it is in place
   };
   std::vector<Staged> staged_;
 };
