@@ -2,7 +2,7 @@
 # The layers, lowest first; a file's layer is its folder under ROOT/include/probecomp/ or ROOT/src/. The files
 # at include/probecomp/ itself are error.hpp and version.hpp (below everything) and the umbrella probecomp.hpp
 # (the library's top: io).
-set(layers base geometry nurbs fitting occt cad registration compensation io simulation studies cli python)
+set(layers base geometry nurbs fitting occt cad registration compensation io simulation studies selftest cli python)
 
 function(layer_rank path out)
   if(path MATCHES "^(include/probecomp|src)/([a-z_]+)/")

@@ -25,6 +25,7 @@
 #include "probecomp/io/output_files.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/error.hpp"
+#include "probecomp/selftest/selftest.hpp"
 #include "probecomp/temporary_files.hpp"
 #include "probecomp/version.hpp"
 
@@ -65,6 +66,22 @@ probecomp::cad::Model probecomp::cli::read_part(const std::string& path) {
 }
 
 namespace {
+
+int run_selftest() {
+  std::cout << "probecomp " << version() << " selftest: known answers computed on this machine\n";
+  int failed = 0, total = 0;
+  const auto print = [&](const selftest::Check& c) {
+    ++total;
+    failed += !c.passed();
+    char numbers[96];
+    std::snprintf(numbers, sizeof numbers, "error %9.2e %s  limit %7.1e %s", c.error, c.unit.c_str(), c.limit, c.unit.c_str());
+    std::cout << (c.passed() ? "  ok    " : "  FAIL  ") << numbers << "  " << c.name
+              << (c.detail.empty() ? "" : " (" + c.detail + ")") << '\n' << std::flush;
+  };
+  (void)selftest::run_selftest(print);
+  std::cout << "probecomp selftest: " << total - failed << " of " << total << " checks passed\n";
+  return failed == 0 ? 0 : kExitFailure;
+}
 
 int run_info(const std::string& part, bool json) {
   const cad::Model model = cli::read_part(part);
@@ -358,6 +375,13 @@ int main(int argc, char** argv) {
   demo->add_option("--output-dir", demo_args.output_dir,
                    "Where nominal.igs, raw.csv and both outputs go (default: probecomp-demo)");
 
+  CLI::App* selftest = app.add_subcommand(
+      "selftest",
+      "Known-answer checks of this build on this machine (ISO 10360-6 style): closest points and offsets on exact "
+      "plane, sphere, cylinder and torus NURBS, a fit through exact data, a known registration, both compensations of a "
+      "stored free-form case against its stored truth, NIST-style least-squares plane, sphere and cylinder data. One "
+      "line per check (ok/FAIL, the error, the limit); exit 0 only if every check passes, 1 otherwise.");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -372,6 +396,7 @@ int main(int argc, char** argv) {
     if (project->parsed()) return run_project(part, points, project_units, output);
     if (plan->parsed()) return run_plan(part, spacing, faces, output);
     if (study->parsed()) return cli::run_study(study_args);
+    if (selftest->parsed()) return run_selftest();
     if (simulate->parsed()) {
       if (sim.plan.empty() && !(sim.spacing > 0.0)) throw std::invalid_argument("simulate needs --plan PLAN.csv or --spacing S");
       return cli::run_simulate(sim);

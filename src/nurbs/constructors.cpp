@@ -1,5 +1,6 @@
 #include "probecomp/nurbs/constructors.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -72,6 +73,76 @@ Surface make_cylinder_section(const Point3& center, const Vector3& x_axis, const
   }
   // S_u is the arc's tangent (counter-clockwise about axis), S_v = height·axis, so S_u × S_v is radial outwards.
   return Surface(arc.knots(), KnotVector::uniform(1, 1), P, w);
+}
+
+namespace {
+
+// A unit vector perpendicular to `a`.
+Vector3 perpendicular_to(const Vector3& a) {
+  const Vector3 trial = std::abs(a.x()) < 0.9 ? Vector3::UnitX() : Vector3::UnitY();
+  return a.cross(trial).normalized();
+}
+
+}  // namespace
+
+Surface make_revolved_surface(const Curve& profile, const Point3& axis_point, const Vector3& axis_dir, double start,
+                              double end) {
+  const Vector3 a = axis_dir.normalized();
+  if (!a.allFinite()) throw InvalidGeometry("revolved surface: the axis direction is zero");
+  const int m = profile.num_control_points();
+  // The half-plane of the profile: the radial direction of its control point farthest from the axis. A point
+  // nearer the axis than this (relative to the profile's size) is on it.
+  Vector3 X = Vector3::Zero();
+  double reach = 0.0;
+  for (int j = 0; j < m; ++j) {
+    const Vector3 d = profile.control_point(j) - axis_point;
+    const Vector3 radial = d - d.dot(a) * a;
+    if (radial.norm() > reach) {
+      reach = radial.norm();
+      X = radial / reach;
+    }
+  }
+  if (!(reach > 0.0)) throw InvalidGeometry("revolved surface: the profile lies on the axis");
+  const double on_axis = 1e-12 * reach;
+  const Vector3 Y = a.cross(X);
+  // The arc's knots and weights are the same at every radius: from a unit arc.
+  const Curve unit = make_circular_arc(Point3::Zero(), X, Y, 1.0, start, end);
+  const int n = unit.num_control_points();
+  std::vector<Point3> P(static_cast<std::size_t>(n) * m);
+  std::vector<double> w(P.size());
+  for (int j = 0; j < m; ++j) {
+    const Vector3 d = profile.control_point(j) - axis_point;
+    const Point3 O = axis_point + d.dot(a) * a;
+    const Vector3 radial = d - d.dot(a) * a;
+    const double r = radial.dot(X);
+    if ((radial - r * X).norm() > on_axis || r < -on_axis) {
+      throw InvalidGeometry("revolved surface: the profile must lie in one half-plane bounded by the axis");
+    }
+    for (int i = 0; i < n; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i) * m + j;
+      // The unit arc's control points scaled about the axis (a pole stays at O).
+      P[k] = O + std::max(r, 0.0) * (unit.control_point(i) - Point3::Zero());
+      w[k] = unit.weight(i) * profile.weight(j);
+    }
+  }
+  return Surface(unit.knots(), profile.knots(), P, w);
+}
+
+Surface make_sphere(const Point3& center, const Vector3& axis, double radius) {
+  if (!(radius > 0.0)) throw InvalidGeometry("sphere: the radius must be positive");
+  const Vector3 a = axis.normalized();
+  const Vector3 X = perpendicular_to(a);
+  // From the south pole up: with u counter-clockwise about a, S_u × S_v then points outwards.
+  const Curve half = make_circular_arc(center, X, a, radius, -std::numbers::pi / 2.0, std::numbers::pi / 2.0);
+  return make_revolved_surface(half, center, a, 0.0, 2.0 * std::numbers::pi);
+}
+
+Surface make_torus(const Point3& center, const Vector3& axis, double major, double minor) {
+  if (!(minor > 0.0) || !(major > minor)) throw InvalidGeometry("torus: needs 0 < minor radius < major radius");
+  const Vector3 a = axis.normalized();
+  const Vector3 X = perpendicular_to(a);
+  const Curve tube = make_circular_arc(center + major * X, X, a, minor, 0.0, 2.0 * std::numbers::pi);
+  return make_revolved_surface(tube, center, a, 0.0, 2.0 * std::numbers::pi);
 }
 
 }  // namespace probecomp::nurbs

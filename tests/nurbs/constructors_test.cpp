@@ -52,11 +52,52 @@ TEST(CylinderSection, IsExactWithUnequalWeightsAndOutwardNormal) {
   EXPECT_LT((evaluate(s, 0, 0) - start).norm(), 1e-12);
 }
 
+TEST(Revolved, SphereIsExactWithOutwardNormalsAndPoles) {
+  const Point3 c(150, 80, -40);
+  const Vector3 axis = Vector3(1, 2, 2).normalized();
+  const double R = 12.5;
+  const Surface s = make_sphere(c, axis, R);
+  EXPECT_EQ(s.p(), 2);
+  EXPECT_EQ(s.q(), 2);
+  for (int i = 0; i <= 40; ++i) {
+    for (int j = 0; j <= 20; ++j) {
+      const double u = i / 40.0, v = j / 20.0;
+      const Vector3 d = evaluate(s, u, v) - c;
+      EXPECT_NEAR(d.norm(), R, 1e-12) << u << " " << v;
+      EXPECT_LT((unit_normal(s, u, v).n - d.normalized()).norm(), 1e-9) << u << " " << v;
+    }
+  }
+  EXPECT_LT((evaluate(s, 0.3, 0.0) - (c - R * axis)).norm(), 1e-12);  // v = 0: the pole -axis
+  EXPECT_LT((evaluate(s, 0.7, 1.0) - (c + R * axis)).norm(), 1e-12);
+}
+
+TEST(Revolved, TorusIsExactWithOutwardNormals) {
+  const Point3 c(-20, 5, 7);
+  const Vector3 a = Vector3(0, 1, 1).normalized();
+  const double R = 30.0, r = 4.0;
+  const Surface s = make_torus(c, a, R, r);
+  for (int i = 0; i <= 40; ++i) {
+    for (int j = 0; j <= 40; ++j) {
+      const double u = i / 40.0, v = j / 40.0;
+      const Vector3 d = evaluate(s, u, v) - c;
+      // The torus's implicit form: the point's distance from the centre circle is r.
+      const Vector3 in_plane = d - d.dot(a) * a;
+      const Vector3 from_tube_centre = d - R * in_plane.normalized();
+      EXPECT_NEAR(from_tube_centre.norm(), r, 1e-12) << u << " " << v;
+      EXPECT_LT((unit_normal(s, u, v).n - from_tube_centre.normalized()).norm(), 1e-9) << u << " " << v;
+    }
+  }
+}
+
 TEST(Constructors, RejectBadArguments) {
   EXPECT_THROW((void)make_circular_arc({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0.0, 0, 1), InvalidGeometry);
   EXPECT_THROW((void)make_circular_arc({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 1.0, 1, 1), InvalidGeometry);
   EXPECT_THROW((void)make_circular_arc({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 1.0, 0, 7), InvalidGeometry);
   EXPECT_THROW((void)make_cylinder_section({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 1.0, 0, 1, -1), InvalidGeometry);
+  EXPECT_THROW((void)make_torus({0, 0, 0}, {0, 0, 1}, 1.0, 2.0), InvalidGeometry);
+  // A profile crossing the axis does not sweep one surface.
+  const Curve across = make_circular_arc({0, 0, 0}, {1, 0, 0}, {0, 0, 1}, 1.0, 0.0, 2.0 * std::numbers::pi);
+  EXPECT_THROW((void)make_revolved_surface(across, {0, 0, 0}, {0, 0, 1}, 0.0, 1.0), InvalidGeometry);
 }
 
 }  // namespace

@@ -24,4 +24,20 @@ namespace probecomp::nurbs {
 [[nodiscard]] Surface make_cylinder_section(const Point3& center, const Vector3& x_axis, const Vector3& y_axis,
                                             double r, double start, double end, double height);
 
+// A8.1 in effect: `profile` swept about the axis through `axis_point` along `axis_dir`, from angle `start` to
+// `end` (radians about axis_dir, measured from the direction in which the profile lies off the axis). u: the
+// circular direction (make_circular_arc's knots and weights, times the profile's weight), v: the profile's.
+// The profile must lie in one half-plane bounded by the axis; a control point on the axis stays there (a pole,
+// as at a sphere's ends). Throws InvalidGeometry otherwise.
+[[nodiscard]] Surface make_revolved_surface(const Curve& profile, const Point3& axis_point, const Vector3& axis_dir,
+                                            double start, double end);
+
+// The whole sphere about `center`: a half circle from the pole −axis to +axis revolved once about `axis`.
+// S_u × S_v points outwards.
+[[nodiscard]] Surface make_sphere(const Point3& center, const Vector3& axis, double radius);
+
+// The whole torus: the tube circle of radius `minor` at distance `major` > `minor` from the axis, revolved once.
+// S_u × S_v points outwards (away from the tube's centre circle).
+[[nodiscard]] Surface make_torus(const Point3& center, const Vector3& axis, double major, double minor);
+
 }  // namespace probecomp::nurbs

@@ -1,0 +1,55 @@
+#pragma once
+// Least-squares geometric elements, as ISO 10360-6 and ASME B89.4.10 define them for testing CMM software: the
+// plane, sphere and cylinder that minimise the sum of squared orthogonal distances of the points ("Gaussian"
+// fits). The plane is closed form (the smallest principal direction of the centred points); the sphere and the
+// cylinder are Gauss-Newton on the orthogonal distances (Forbes, NPL Report DITC 140/89, "Least-squares best-fit
+// geometric elements"), solved by QR, in coordinates centred on the points so that data far from the origin
+// lose no digits.
+
+#include <span>
+
+#include "probecomp/geometry/types.hpp"
+
+namespace probecomp::fitting {
+
+enum class ElementFitStatus {
+  OK,
+  NotConverged,  // Gauss-Newton did not settle within the iteration limit; the last estimate is returned
+  Degenerate,    // too few points, or points that do not fix the element (all on a line, a plane for a sphere)
+};
+
+[[nodiscard]] const char* to_string(ElementFitStatus s);
+
+struct PlaneFit {
+  ElementFitStatus status = ElementFitStatus::Degenerate;
+  Point3 point = Point3::Zero();    // the centroid, which the least-squares plane passes through
+  Vector3 normal = Vector3::Zero(); // unit; its sign is arbitrary
+  double rms = 0.0;                 // root mean square orthogonal distance, mm
+};
+
+struct SphereFit {
+  ElementFitStatus status = ElementFitStatus::Degenerate;
+  Point3 center = Point3::Zero();
+  double radius = 0.0;
+  double rms = 0.0;
+  int iterations = 0;
+};
+
+struct CylinderFit {
+  ElementFitStatus status = ElementFitStatus::Degenerate;
+  Point3 axis_point = Point3::Zero();  // the axis's point nearest the points' centroid
+  Vector3 axis = Vector3::Zero();      // unit; its sign is arbitrary
+  double radius = 0.0;
+  double rms = 0.0;
+  int iterations = 0;
+};
+
+// At least 3 points not on one line.
+[[nodiscard]] PlaneFit fit_plane(std::span<const Point3> points);
+// At least 4 points not on one plane. Starts from the algebraic (linear) sphere fit.
+[[nodiscard]] SphereFit fit_sphere(std::span<const Point3> points);
+// At least 5 points. Starts from each principal direction of the points in turn as the axis and keeps the best
+// converged fit, so a short cylinder or an arc of one needs no guess.
+[[nodiscard]] CylinderFit fit_cylinder(std::span<const Point3> points);
+
+}  // namespace probecomp::fitting

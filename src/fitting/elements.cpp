@@ -1,0 +1,223 @@
+#include "probecomp/fitting/elements.hpp"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace probecomp::fitting {
+
+namespace {
+
+// Gauss-Newton has converged when a step changes no parameter by more than kRelativeStep of the data's size
+// (the points' largest distance from their centroid): 0.05 pm on a 50 mm part. On ill-conditioned data (a small
+// cap of a sphere, an arc of a cylinder) rounding may keep the steps above that; a step that no longer shrinks
+// once below kRoundingFloor of the size is that floor, and ends the iteration too.
+constexpr double kRelativeStep = 1e-12;
+constexpr double kRoundingFloor = 1e-9;
+
+bool settled(double moved, double last_moved, double size) {
+  return moved <= kRelativeStep * size || (moved >= last_moved && last_moved <= kRoundingFloor * size);
+}
+constexpr int kMaxIterations = 100;
+
+struct Centred {
+  Point3 centroid = Point3::Zero();
+  std::vector<Vector3> p;  // points − centroid
+  double size = 0.0;       // largest |p|
+};
+
+Centred centre(std::span<const Point3> points) {
+  Centred c;
+  for (const Point3& x : points) c.centroid += x;
+  c.centroid /= static_cast<double>(points.size());
+  c.p.reserve(points.size());
+  for (const Point3& x : points) {
+    c.p.push_back(x - c.centroid);
+    c.size = std::max(c.size, c.p.back().norm());
+  }
+  return c;
+}
+
+// Eigenvectors of the centred points' scatter matrix, columns in increasing order of eigenvalue.
+Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> principal_directions(const Centred& c) {
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Vector3& x : c.p) scatter += x * x.transpose();
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter);
+}
+
+double rms_of(const Eigen::VectorXd& d) { return std::sqrt(d.squaredNorm() / static_cast<double>(d.size())); }
+
+// A rotation taking `axis` (unit) to +z.
+Eigen::Matrix3d to_z(const Vector3& axis) {
+  return Eigen::Quaterniond::FromTwoVectors(axis, Vector3::UnitZ()).toRotationMatrix();
+}
+
+// One cylinder fit from a starting axis through `start` (centred coordinates). Parametrisation of Forbes
+// (DITC 140/89 §4.3): in a frame where the current axis is z through the origin, the axis is (x0, y0, 0) +
+// t(a, b, 1); at a = b = x0 = y0 = 0 the distance of (x, y, z) is ρ − r, ρ = √(x² + y²), with derivatives
+// (−x/ρ, −y/ρ, −xz/ρ, −yz/ρ, −1) in (x0, y0, a, b, r).
+CylinderFit cylinder_from(const Centred& c, Vector3 axis, Point3 through, double radius) {
+  CylinderFit f;
+  const Eigen::Index n = static_cast<Eigen::Index>(c.p.size());
+  Eigen::MatrixXd J(n, 5);
+  Eigen::VectorXd d(n);
+  double last_moved = std::numeric_limits<double>::infinity();
+  for (f.iterations = 1; f.iterations <= kMaxIterations; ++f.iterations) {
+    const Eigen::Matrix3d R = to_z(axis);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Vector3 q = R * (c.p[static_cast<std::size_t>(i)] - through);
+      const double rho = std::hypot(q.x(), q.y());
+      if (!(rho > 0.0)) return f;  // a point on the axis: no direction to it
+      d(i) = rho - radius;
+      J.row(i) << -q.x() / rho, -q.y() / rho, -q.x() * q.z() / rho, -q.y() * q.z() / rho, -1.0;
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J);
+    if (qr.rank() < 5) return f;
+    const Eigen::Matrix<double, 5, 1> step = qr.solve(-d);
+    if (!step.allFinite()) return f;
+    const Eigen::Matrix3d back = R.transpose();
+    through += back * Vector3(step(0), step(1), 0.0);
+    axis = (back * Vector3(step(2), step(3), 1.0)).normalized();
+    radius += step(4);
+    const double moved = std::max({std::abs(step(0)), std::abs(step(1)), std::abs(step(4)),
+                                   c.size * std::abs(step(2)), c.size * std::abs(step(3))});
+    if (settled(moved, last_moved, c.size)) {
+      f.status = ElementFitStatus::OK;
+      break;
+    }
+    last_moved = moved;
+  }
+  if (f.status != ElementFitStatus::OK) {
+    f.status = ElementFitStatus::NotConverged;
+    f.iterations = kMaxIterations;
+  }
+  // Residuals at the final parameters, and the axis point nearest the centroid (the origin here).
+  const Eigen::Matrix3d R = to_z(axis);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Vector3 q = R * (c.p[static_cast<std::size_t>(i)] - through);
+    d(i) = std::hypot(q.x(), q.y()) - radius;
+  }
+  through -= through.dot(axis) * axis;
+  f.axis_point = c.centroid + through;
+  f.axis = axis;
+  f.radius = std::abs(radius);
+  f.rms = rms_of(d);
+  return f;
+}
+
+}  // namespace
+
+const char* to_string(ElementFitStatus s) {
+  switch (s) {
+    case ElementFitStatus::OK: return "ok";
+    case ElementFitStatus::NotConverged: return "not-converged";
+    case ElementFitStatus::Degenerate: return "degenerate";
+  }
+  return "?";
+}
+
+PlaneFit fit_plane(std::span<const Point3> points) {
+  PlaneFit f;
+  if (points.size() < 3) return f;
+  const Centred c = centre(points);
+  const auto eig = principal_directions(c);
+  // Two directions of spread are needed: the middle eigenvalue must stand clear of rounding.
+  if (!(eig.eigenvalues()(1) > 1e-24 * eig.eigenvalues()(2))) return f;
+  f.point = c.centroid;
+  f.normal = eig.eigenvectors().col(0).normalized();
+  Eigen::VectorXd d(static_cast<Eigen::Index>(c.p.size()));
+  for (std::size_t i = 0; i < c.p.size(); ++i) d(static_cast<Eigen::Index>(i)) = c.p[i].dot(f.normal);
+  f.rms = rms_of(d);
+  f.status = ElementFitStatus::OK;
+  return f;
+}
+
+SphereFit fit_sphere(std::span<const Point3> points) {
+  SphereFit f;
+  if (points.size() < 4) return f;
+  const Centred c = centre(points);
+  const Eigen::Index n = static_cast<Eigen::Index>(c.p.size());
+  // Algebraic start: |x|² = 2 c·x + (r² − |c|²), linear in (c, r² − |c|²).
+  Eigen::MatrixXd A(n, 4);
+  Eigen::VectorXd b(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Vector3& x = c.p[static_cast<std::size_t>(i)];
+    A.row(i) << 2.0 * x.x(), 2.0 * x.y(), 2.0 * x.z(), 1.0;
+    b(i) = x.squaredNorm();
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> start(A);
+  if (start.rank() < 4) return f;
+  const Eigen::Vector4d s = start.solve(b);
+  Vector3 centre_ = s.head<3>();
+  double radius = std::sqrt(std::max(s(3) + centre_.squaredNorm(), 0.0));
+  // Gauss-Newton on d_i = |x_i − c| − r, derivatives (−(x_i − c)/|x_i − c|, −1).
+  Eigen::MatrixXd J(n, 4);
+  Eigen::VectorXd d(n);
+  double last_moved = std::numeric_limits<double>::infinity();
+  for (f.iterations = 1; f.iterations <= kMaxIterations; ++f.iterations) {
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Vector3 v = c.p[static_cast<std::size_t>(i)] - centre_;
+      const double len = v.norm();
+      if (!(len > 0.0)) return f;
+      d(i) = len - radius;
+      J.row(i) << -v.x() / len, -v.y() / len, -v.z() / len, -1.0;
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J);
+    if (qr.rank() < 4) return f;
+    const Eigen::Vector4d step = qr.solve(-d);
+    if (!step.allFinite()) return f;
+    centre_ += step.head<3>();
+    radius += step(3);
+    const double moved = step.cwiseAbs().maxCoeff();
+    if (settled(moved, last_moved, c.size)) {
+      f.status = ElementFitStatus::OK;
+      break;
+    }
+    last_moved = moved;
+  }
+  if (f.status != ElementFitStatus::OK) {
+    f.status = ElementFitStatus::NotConverged;
+    f.iterations = kMaxIterations;
+  }
+  for (Eigen::Index i = 0; i < n; ++i) d(i) = (c.p[static_cast<std::size_t>(i)] - centre_).norm() - radius;
+  f.center = c.centroid + centre_;
+  f.radius = radius;
+  f.rms = rms_of(d);
+  return f;
+}
+
+CylinderFit fit_cylinder(std::span<const Point3> points) {
+  CylinderFit best;
+  if (points.size() < 5) return best;
+  const Centred c = centre(points);
+  const auto eig = principal_directions(c);
+  for (int k = 2; k >= 0; --k) {
+    const Vector3 axis = eig.eigenvectors().col(k).normalized();
+    // Start: the algebraic circle fit of the points projected along this axis, s² + t² = 2as + 2bt + c (an arc's
+    // centre is far from its centroid, so the centroid would be a poor start).
+    const Vector3 e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+    Eigen::MatrixXd A(static_cast<Eigen::Index>(c.p.size()), 3);
+    Eigen::VectorXd rhs(A.rows());
+    for (Eigen::Index i = 0; i < A.rows(); ++i) {
+      const Vector3& x = c.p[static_cast<std::size_t>(i)];
+      const double s = x.dot(e1), t = x.dot(e2);
+      A.row(i) << 2.0 * s, 2.0 * t, 1.0;
+      rhs(i) = s * s + t * t;
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> circle(A);
+    if (circle.rank() < 3) continue;
+    const Eigen::Vector3d abc = circle.solve(rhs);
+    const double radius = std::sqrt(std::max(abc(2) + abc(0) * abc(0) + abc(1) * abc(1), 0.0));
+    const Point3 through = Point3::Zero() + abc(0) * e1 + abc(1) * e2;
+    const CylinderFit f = cylinder_from(c, axis, through, radius);
+    const bool better = f.status == ElementFitStatus::OK &&
+                        (best.status != ElementFitStatus::OK || f.rms < best.rms);
+    if (better || (best.status == ElementFitStatus::Degenerate && f.status == ElementFitStatus::NotConverged)) best = f;
+  }
+  return best;
+}
+
+}  // namespace probecomp::fitting
