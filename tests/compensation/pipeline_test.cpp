@@ -7,11 +7,15 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <random>
 
 #include "probecomp/cad/locator.hpp"
 #include "probecomp/cad/plan.hpp"
+#include "probecomp/simulation/freeform_case.hpp"
+#include "probecomp/simulation/measure.hpp"
 #include "probecomp/studies/freeform_study.hpp"
 
 namespace probecomp {
@@ -380,6 +384,74 @@ TEST(Pipeline, MultiFaceStepPartLandsEveryPointOnItsFace) {
   int fitted = 0;
   for (const auto& f : r.faces) fitted += f.fitted;
   EXPECT_GE(fitted, 2);
+}
+
+}  // namespace
+}  // namespace probecomp
+
+namespace probecomp {
+namespace {
+
+// Issue 25: 1 % of the points moved 0.1–5 mm (gross errors: a dirty tip, a vibration) are all flagged, and move no
+// other point's result by more than 0.5 µm from what it is without them (measured: 0.05, 0.03, 0.02 µm). Three
+// seeds on the paper's free-form case, 60 × 30 points. Printed, not bounded: how far the others are from the run
+// where those points kept their true positions, which is what losing 1 % of the data costs (measured 14.7, 30.3 and
+// 1.2 µm, 3.8, 6.6 and 0.7 stated uncertainties, at the dent this grid barely resolves: the fit's knots and
+// smoothing follow which points it has; an open issue, see the issue 25 notes).
+TEST(Pipeline, GrossOutliersMoveNoOtherPoint) {
+  simulation::FreeformCase c = simulation::paper_freeform_case();
+  const cad::Model actual = simulation::actual_model(c.nominal, c.deformation, c.placement);
+  const cad::ModelLocator locator(actual);
+  const std::vector<simulation::ProgrammedPoint> plan = simulation::grid_plan(c.nominal.faces.front(), 60, 30);
+  compensation::CompensateOptions o;
+  o.probe_radius = c.probe_radius;
+  for (const std::uint64_t seed : {1u, 2u, 3u}) {
+    SCOPED_TRACE(seed);
+    std::vector<Point3> clean;
+    for (const simulation::Touch& t : simulation::simulate_touches(
+             locator, plan, {.probe_radius = c.probe_radius, .noise_sigma = c.noise_sigma, .seed = seed})) {
+      ASSERT_EQ(t.status, simulation::Touch::Status::OK);
+      clean.push_back(t.measured);
+    }
+    std::mt19937_64 rng(seed);
+    std::vector<std::size_t> order(clean.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::shuffle(order.begin(), order.end(), rng);
+    std::vector<char> moved(clean.size(), 0);
+    std::vector<Point3> contaminated = clean;
+    // Along the programmed normal, out or in: the probe's direction of travel, where a dirty tip or a vibration
+    // puts a reading's error (a move along the surface would only be a reading of another place).
+    std::uniform_real_distribution<double> size(0.1, 5.0);
+    for (std::size_t k = 0; k < clean.size() / 100; ++k) {
+      const std::size_t i = order[k];
+      moved[i] = 1;
+      contaminated[i] += (rng() % 2 ? 1.0 : -1.0) * size(rng) * plan[i].normal;
+    }
+    std::vector<Point3> without;
+    for (std::size_t i = 0; i < clean.size(); ++i) {
+      if (!moved[i]) without.push_back(clean[i]);
+    }
+    const auto with_errors = compensation::compensate(c.nominal, contaminated, std::nullopt, o);
+    const auto alone = compensation::compensate(c.nominal, without, std::nullopt, o);
+    const auto reference = compensation::compensate(c.nominal, clean, std::nullopt, o);
+    double largest = 0.0, largest_vs_clean = 0.0, in_u = 0.0;
+    for (std::size_t i = 0, j = 0; i < clean.size(); ++i) {
+      if (moved[i]) {
+        EXPECT_EQ(with_errors.points[i].status, compensation::PointStatus::Outlier) << i;
+        continue;
+      }
+      const compensation::CompensatedPoint& p = with_errors.points[i];
+      ASSERT_EQ(p.status, alone.points[j].status) << i;
+      largest = std::max(largest, (p.contact - alone.points[j].contact).norm());
+      const double vs_clean = (p.contact - reference.points[i].contact).norm();
+      largest_vs_clean = std::max(largest_vs_clean, vs_clean);
+      in_u = std::max(in_u, vs_clean / reference.points[i].uncertainty);
+      ++j;
+    }
+    std::cout << "seed " << seed << ": others moved " << largest * 1e3 << " um from the run without the outliers; "
+              << largest_vs_clean * 1e3 << " um (" << in_u << " u) from the run with them unmoved\n";
+    EXPECT_LE(largest, 0.0005);
+  }
 }
 
 }  // namespace
