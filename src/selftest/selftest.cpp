@@ -21,7 +21,7 @@
 #include "probecomp/simulation/freeform_case.hpp"
 #include "probecomp/simulation/measure.hpp"
 #include "selftest/random.hpp"
-#include "selftest_case.hpp"  // kStoredFreeformCase: data/selftest/freeform_case.csv, generated into the build
+#include "selftest_case.hpp"  // kStoredFreeformCaseParts: src/selftest/freeform_case.csv, generated into the build
 
 namespace probecomp::selftest {
 
@@ -227,7 +227,9 @@ struct StoredCase {
 
 StoredCase stored_case() {
   StoredCase c;
-  std::istringstream in(kStoredFreeformCase);
+  std::string text;
+  for (const char* part : kStoredFreeformCaseParts) text += part;
+  std::istringstream in(text);
   std::string line;
   while (std::getline(in, line)) {
     if (line.empty() || line[0] == '#' || line[0] == 'x') continue;
