@@ -78,6 +78,7 @@ TEST(ElementFits, ReferenceDataGiveTheirKnownElement) {
         EXPECT_LT((f.center - e.point).norm(), 1e-10);
         EXPECT_NEAR(f.radius, e.radius, 1e-10);
         EXPECT_NEAR(f.rms, e.rms, 1e-12);
+        EXPECT_LT(f.iterations, 20);
         break;
       }
       case selftest::ElementKind::Cylinder: {
@@ -88,6 +89,7 @@ TEST(ElementFits, ReferenceDataGiveTheirKnownElement) {
         EXPECT_LT((off - off.dot(f.axis) * f.axis).norm(), 1e-10);
         EXPECT_NEAR(f.radius, e.radius, 1e-10);
         EXPECT_NEAR(f.rms, e.rms, 1e-12);
+        EXPECT_LT(f.iterations, 20);
         break;
       }
     }
