@@ -186,9 +186,9 @@ nurbs::ClosestPointResult AnalyticFace::at(const Angle& a, const Angle& b) const
 namespace {
 
 // The angle of (c, s) (not both zero: then the angle 0) nearest to it in [lo, hi], with its cosine and sine: the
-// direction's own where it falls inside, so no trigonometric function is needed but atan2.
-AnalyticFace::Angle closest_angle_of(double c, double s, double lo, double hi, bool& clamped) {
-  const double norm = std::sqrt(c * c + s * s);
+// direction's own where it falls inside, so no trigonometric function is needed but atan2. `norm` is |(c, s)|,
+// which the caller often has already.
+AnalyticFace::Angle closest_angle_of(double c, double s, double norm, double lo, double hi, bool& clamped) {
   if (!(norm > 0.0)) c = 1.0, s = 0.0;
   else c /= norm, s /= norm;
   bool out = false;
@@ -223,7 +223,7 @@ nurbs::ClosestPointResult AnalyticFace::closest_point(const Point3& query) const
     // ρ cos(θ − a) from the axis.
     const double rho = std::sqrt(px * px + py * py);
     bool a_clamped = false;
-    a = closest_angle_of(px, py, a_map_.lo(), a_map_.hi(), a_clamped);
+    a = closest_angle_of(px, py, rho, a_map_.lo(), a_map_.hi(), a_clamped);
     const double rho_a = a_clamped ? px * a.c + py * a.s : rho;
     switch (s.kind) {
       case ElementaryKind::Cylinder: b = length(clamp_to(pz, b_map_.lo(), b_map_.hi(), clamped)); break;
@@ -231,8 +231,14 @@ nurbs::ClosestPointResult AnalyticFace::closest_point(const Point3& query) const
         b = length(clamp_to((rho_a - s.radius) * std::sin(s.half_angle) + pz * std::cos(s.half_angle), b_map_.lo(),
                             b_map_.hi(), clamped));
         break;
-      case ElementaryKind::Sphere: b = closest_angle_of(rho_a, pz, b_map_.lo(), b_map_.hi(), clamped); break;
-      case ElementaryKind::Torus: b = closest_angle_of(rho_a - s.radius, pz, b_map_.lo(), b_map_.hi(), clamped); break;
+      case ElementaryKind::Sphere:
+        b = closest_angle_of(rho_a, pz, std::sqrt(rho_a * rho_a + pz * pz), b_map_.lo(), b_map_.hi(), clamped);
+        break;
+      case ElementaryKind::Torus: {
+        const double from_tube = rho_a - s.radius;  // in the meridian half-plane, from the tube's centre
+        b = closest_angle_of(from_tube, pz, std::sqrt(from_tube * from_tube + pz * pz), b_map_.lo(), b_map_.hi(), clamped);
+        break;
+      }
       default: break;
     }
     clamped = clamped || a_clamped;

@@ -7,6 +7,13 @@
 
 namespace probecomp::cad {
 
+namespace {
+// An elementary offset face's normals against its offset NURBS's: loose, as the NURBS is only within the offset's
+// tolerance (1e-4 mm over spans of a few mm: normals off by up to about 1e-4 rad); it catches a wrong side or a
+// wrong parameter map, which are off by far more.
+constexpr double kOffsetNormalMatch = 1e-3;
+}  // namespace
+
 int OffsetModel::failed() const {
   return static_cast<int>(std::count_if(faces.begin(), faces.end(), [](const auto& r) { return !r.ok(); }));
 }
@@ -26,7 +33,7 @@ OffsetModel offset_model(const Model& model, double d, const fitting::OffsetOpti
     face.exact = false;
     face.source_type = "offset " + face.source_type;
     // An elementary face's offset is elementary again, exactly; the offset NURBS approximates it to its deviation,
-    // so the check that both describe one surface at the same parameters is that loose (the normals' 1e-3 rad
+    // so the check that both describe one surface at the same parameters is that loose (kOffsetNormalMatch
     // catches a wrong side or map, not the fit's own error).
     if (face.analytic) {
       const std::optional<AnalyticFace> exact = face.analytic->offset(d * face.outward);
@@ -34,7 +41,7 @@ OffsetModel offset_model(const Model& model, double d, const fitting::OffsetOpti
       if (exact && results[k]->status != fitting::OffsetResult::Status::Degenerate) {
         const AnalyticFace::Check check = exact->compare(face.surface);
         const double allowed = 2.0 * std::max(options.tolerance, results[k]->deviation) + kAnalyticMatch;
-        if (check.distance <= allowed && check.normal_angle <= 1e-3) face.analytic = std::make_shared<const AnalyticFace>(*exact);
+        if (check.distance <= allowed && check.normal_angle <= kOffsetNormalMatch) face.analytic = std::make_shared<const AnalyticFace>(*exact);
       }
     }
     out.faces.push_back(std::move(*results[k]));
