@@ -11,14 +11,15 @@ seconds=${1:-30}
 ./scripts/setup.sh --fuzz
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPROBECOMP_FUZZ=ON \
   -DPROBECOMP_BUILD_TESTS=OFF -DPROBECOMP_BUILD_BENCH=OFF -DPROBECOMP_BUILD_PYTHON=OFF >/dev/null
-cmake --build build-fuzz -j"$(nproc)"
+targets=(points_csv points_dmis points_qif transform cad_step cad_iges)
+cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]/#/fuzz_}"
 
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"
 export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp:print_suppressions=0}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 mkdir -p build-fuzz/findings
 failed=0
-for target in points_csv points_dmis points_qif transform cad_step cad_iges; do
+for target in "${targets[@]}"; do
   # The working corpus grows in build-fuzz/corpus; the seeds in the source tree are only read.
   work="build-fuzz/corpus/$target"
   mkdir -p "$work"
