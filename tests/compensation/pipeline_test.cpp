@@ -393,11 +393,14 @@ namespace probecomp {
 namespace {
 
 // Issue 25: 1 % of the points moved 0.1–5 mm (gross errors: a dirty tip, a vibration) are all flagged, and move no
-// other point's result by more than 0.5 µm from what it is without them (measured: 0.05, 0.03, 0.02 µm). Three
-// seeds on the paper's free-form case, 60 × 30 points. Printed, not bounded: how far the others are from the run
-// where those points kept their true positions, which is what losing 1 % of the data costs (measured 14.7, 30.3 and
-// 1.2 µm, 3.8, 6.6 and 0.7 stated uncertainties, at the dent this grid barely resolves: the fit's knots and
-// smoothing follow which points it has; an open issue, see the issue 25 notes).
+// other point's result (contact point and deviation) by more than 0.5 µm from what it is without them (measured:
+// 0.053, 0.033, 0.021 µm; the deviations moved up to 0.52 µm before the registration was made again without the
+// flagged points, compensation/pipeline.cpp register_without_outliers). Three
+// seeds on the paper's free-form case, 60 × 30 points. Against the run where those points kept their true
+// positions, the others differ by what losing 1 % of the data costs: their deviations by 6.7, 6.1 and 0.9 µm, under
+// 2 stated uncertainties (bounded here at 3). Their contact points can slide further along the surface (14.7, 30.3,
+// 1.2 µm) on the dent's flanks, which this grid barely resolves: the fitted normal there follows which points the
+// fit has (printed, not bounded; the distance from the true surface stays within the points' u).
 TEST(Pipeline, GrossOutliersMoveNoOtherPoint) {
   simulation::FreeformCase c = simulation::paper_freeform_case();
   const cad::Model actual = simulation::actual_model(c.nominal, c.deformation, c.placement);
@@ -434,7 +437,7 @@ TEST(Pipeline, GrossOutliersMoveNoOtherPoint) {
     const auto with_errors = compensation::compensate(c.nominal, contaminated, std::nullopt, o);
     const auto alone = compensation::compensate(c.nominal, without, std::nullopt, o);
     const auto reference = compensation::compensate(c.nominal, clean, std::nullopt, o);
-    double largest = 0.0, largest_vs_clean = 0.0, in_u = 0.0;
+    double largest = 0.0, largest_vs_clean = 0.0, dev_vs_clean = 0.0, dev_in_u = 0.0;
     for (std::size_t i = 0, j = 0; i < clean.size(); ++i) {
       if (moved[i]) {
         EXPECT_EQ(with_errors.points[i].status, compensation::PointStatus::Outlier) << i;
@@ -442,15 +445,18 @@ TEST(Pipeline, GrossOutliersMoveNoOtherPoint) {
       }
       const compensation::CompensatedPoint& p = with_errors.points[i];
       ASSERT_EQ(p.status, alone.points[j].status) << i;
-      largest = std::max(largest, (p.contact - alone.points[j].contact).norm());
+      largest = std::max({largest, (p.contact - alone.points[j].contact).norm(), std::abs(p.deviation - alone.points[j].deviation)});
       const double vs_clean = (p.contact - reference.points[i].contact).norm();
+      dev_vs_clean = std::max(dev_vs_clean, std::abs(p.deviation - reference.points[i].deviation));
+      dev_in_u = std::max(dev_in_u, std::abs(p.deviation - reference.points[i].deviation) / reference.points[i].uncertainty);
       largest_vs_clean = std::max(largest_vs_clean, vs_clean);
-      in_u = std::max(in_u, vs_clean / reference.points[i].uncertainty);
       ++j;
     }
     std::cout << "seed " << seed << ": others moved " << largest * 1e3 << " um from the run without the outliers; "
-              << largest_vs_clean * 1e3 << " um (" << in_u << " u) from the run with them unmoved\n";
+              << dev_vs_clean * 1e3 << " um in deviation (" << dev_in_u << " u) and " << largest_vs_clean * 1e3
+              << " um in contact point from the run with them unmoved\n";
     EXPECT_LE(largest, 0.0005);
+    EXPECT_LE(dev_in_u, 3.0);
   }
 }
 
