@@ -145,6 +145,23 @@ Check offset(const std::string& name, const nurbs::Surface& s, double d,
   return c;
 }
 
+Check offset_plane() {
+  const Point3 O(1000, -500, 250);
+  const Vector3 a(100, 0, 20), b(0, 60, -10), n = a.cross(b).normalized();
+  return offset("offset: plane, degree 3 x 2, by +2 (is the plane 2 mm out)", nurbs::make_plane_patch(O, a, b, 3, 2, 2, 3),
+                2.0, [&](const Point3& P) { return (P - O).dot(n) - 2.0; });
+}
+
+Check offset_cylinder() {
+  const Point3 c(-20, 35, 5);
+  const Vector3 X = Vector3(1, 1, 0).normalized(), Y = Vector3(-1, 1, 1).normalized(), axis = X.cross(Y);
+  return offset("offset: cylinder R 8 by +1.5 (is R 9.5)",
+                nurbs::make_cylinder_section(c, X, Y, 8.0, 0.0, 2.0 * std::numbers::pi, 40.0), 1.5, [&](const Point3& P) {
+                  const Vector3 d = P - c;
+                  return (d - d.dot(axis) * axis).norm() - 9.5;
+                });
+}
+
 Check offset_sphere() {
   const Point3 c(150, 80, -40);
   return offset(("offset: sphere R 12.5 by +1.5 (is R 14)"), nurbs::make_sphere(c, Vector3(1, 2, 2), 12.5), 1.5,
@@ -358,6 +375,8 @@ std::vector<Check> run_selftest(const std::function<void(const Check&)>& done) {
   one("closest point: sphere", kClosestPointLimit, [] { Random r{2}; return closest_point_sphere(r); });
   one("closest point: cylinder", kClosestPointLimit, [] { Random r{3}; return closest_point_cylinder(r); });
   one("closest point: torus", kClosestPointLimit, [] { Random r{4}; return closest_point_torus(r); });
+  one("offset: plane", fitting::OffsetOptions{}.tolerance, offset_plane);
+  one("offset: cylinder", fitting::OffsetOptions{}.tolerance, offset_cylinder);
   one("offset: sphere", fitting::OffsetOptions{}.tolerance, offset_sphere);
   one("offset: torus", fitting::OffsetOptions{}.tolerance, offset_torus);
   one("fit: exact data", kExactFitLimit, exact_fit);
