@@ -26,7 +26,9 @@ void (*handler_of(int signal))(int) {
 void ours(int) {}
 
 // A read through a null pointer the compiler cannot see coming, as in a reader that follows a broken reference.
-int read_through(volatile int* p) { return *p; }
+// Not instrumented, like OpenCASCADE's own code: in the sanitizer build UndefinedBehaviorSanitizer would report the
+// null load itself before any signal.
+__attribute__((no_sanitize("address", "undefined"))) int read_through(volatile int* p) { return *p; }
 
 TEST(CrashGuard, TurnsASegmentationFaultIntoAFailureAndRestoresHandlers) {
   struct sigaction mine {};
