@@ -206,6 +206,10 @@ TEST(CadModelFuzzFindings, StepWithABrokenPointReferenceReadsWithWarnings) {
   EXPECT_NE(model.read_warnings.front().find("OpenCASCADE found errors in"), std::string::npos)
       << model.read_warnings.front();
   for (const std::string& w : model.read_warnings) EXPECT_EQ(w.find('\n'), std::string::npos) << w;
+  // The broken reference is entity #114's, a B-spline surface that could then not be made.
+  ASSERT_EQ(model.read_warnings.size(), 3u);
+  EXPECT_NE(model.read_warnings[2].find("could not convert 1 of the file's entities"), std::string::npos);
+  EXPECT_NE(model.read_warnings[2].find("#114 B_SPLINE_SURFACE_WITH_KNOTS"), std::string::npos) << model.read_warnings[2];
 }
 
 TEST(CadModelFuzzFindings, IgesWithABrokenParameterIsRefused) {
@@ -232,6 +236,12 @@ TEST(CadModelReadWarnings, NoneForACleanFileAndTheFilesOwnErrorsOtherwise) {
     ++declared;
   }
   ASSERT_EQ(declared, 4);
+  // The IGES specification's sample of every entity type holds one OpenCASCADE does not convert: D171, a conic arc
+  // of form 2 (its directory entry, lines 207-208: type 104, form 2, a hyperbola), which it reports and leaves out.
+  const Model every_entity = read_model(kCadDir / "iges_spec_nentity.igs");
+  ASSERT_EQ(every_entity.read_warnings.size(), 1u);
+  EXPECT_NE(every_entity.read_warnings[0].find("could not convert 1 of the file's entities"), std::string::npos);
+  EXPECT_NE(every_entity.read_warnings[0].find("D171 104 2 ConicArc"), std::string::npos) << every_entity.read_warnings[0];
   const Model model = read_model(kCadDir / "asitus_tail_section_asm.stp");
   ASSERT_EQ(model.read_warnings.size(), 1u);
   EXPECT_NE(model.read_warnings[0].find("errors in 4 of the file's"), std::string::npos) << model.read_warnings[0];
