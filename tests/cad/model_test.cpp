@@ -224,6 +224,16 @@ TEST(CadModelFuzzFindings, IgesWithABrokenParameterIsRefused) {
   EXPECT_EQ(message.find('\n'), std::string::npos) << message;
 }
 
+TEST(CadModelFuzzFindings, StepWhoseSurfaceFailsHalfwayIsRefused) {
+  // wavy-cube with three lines garbled (an edge, a point's type, a control point's coordinate): its B-spline surface
+  // cannot be made. OpenCASCADE's transfer throws
+  // inside Geom_BSplineSurface's constructor and loses the knot arrays it had made (a leak inside OpenCASCADE,
+  // suppressed in scripts/lsan.supp); what is left has no surface.
+  const std::filesystem::path p = kFuzzDir / "cad_step-occt-leak-Geom_BSplineSurface-knots.stp";
+  const std::string message = error_of(p);
+  EXPECT_EQ(message, p.string() + ": no surfaces in the file");
+}
+
 TEST(CadModelReadWarnings, NoneForACleanFileAndTheFilesOwnErrorsOtherwise) {
   EXPECT_TRUE(read_model(kCadDir / "asitus_wavy-cube.stp").read_warnings.empty());
   // tail_section declares its degree unit four times as CONVERSION_BASED_UNIT with NAMED_UNIT(*), which
