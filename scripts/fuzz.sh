@@ -4,7 +4,7 @@
 # targets and the QIF sample for the QIF one. Exits non-zero if any target crashes, leaks or trips a sanitizer;
 # libFuzzer leaves the input as build-fuzz/findings/crash-* (keep it as a regression test). Prints the executions of
 # each target.
-#   scripts/fuzz.sh [SECONDS]
+#   scripts/fuzz.sh [SECONDS] [TARGET...]      (targets: points_csv points_dmis points_qif transform cad_step cad_iges)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-30}
@@ -12,6 +12,7 @@ seconds=${1:-30}
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPROBECOMP_FUZZ=ON \
   -DPROBECOMP_BUILD_TESTS=OFF -DPROBECOMP_BUILD_BENCH=OFF -DPROBECOMP_BUILD_PYTHON=OFF >/dev/null
 targets=(points_csv points_dmis points_qif transform cad_step cad_iges)
+[ $# -gt 1 ] && targets=("${@:2}")
 cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]/#/fuzz_}"
 
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"
