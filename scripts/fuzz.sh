@@ -37,14 +37,10 @@ for target in "${targets[@]}"; do
     mkdir -p "build-fuzz/seeds/$target" && cp "${files[@]}" "build-fuzz/seeds/$target/" && seeds+=("build-fuzz/seeds/$target")
   fi
   log="build-fuzz/findings/$target.log"
-  # OpenCASCADE is built without frame pointers: the fast unwinder stops one frame into it, too short for the
-  # suppressions (scripts/lsan.supp), which name the exchange modules a leak's stack passes through.
-  options=$ASAN_OPTIONS
-  case $target in cad_*) options="$options:fast_unwind_on_malloc=0" ;; esac
   # -max_len: the CAD seeds are tens of kB; the rest stay small so that mutations stay near the grammar.
   max_len=4096
   case $target in cad_*|points_qif) max_len=65536 ;; esac
-  if ASAN_OPTIONS=$options "build-fuzz/fuzz/fuzz_$target" "$work" "${seeds[@]}" -max_total_time="$seconds" -max_len="$max_len" \
+  if "build-fuzz/fuzz/fuzz_$target" "$work" "${seeds[@]}" -max_total_time="$seconds" -max_len="$max_len" \
        -artifact_prefix="build-fuzz/findings/$target-" -print_final_stats=1 >"$log" 2>&1; then
     runs=$(grep -m1 -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' || echo '?')
     echo "fuzz_$target: ok, $runs executions in ${seconds} s"
