@@ -40,12 +40,15 @@ for target in "${targets[@]}"; do
   # -max_len: the CAD seeds are tens of kB; the rest stay small so that mutations stay near the grammar.
   max_len=4096
   case $target in cad_*|points_qif) max_len=65536 ;; esac
-  if "build-fuzz/fuzz/fuzz_$target" "$work" "${seeds[@]}" -max_total_time="$seconds" -max_len="$max_len" \
-       -artifact_prefix="build-fuzz/findings/$target-" -print_final_stats=1 >"$log" 2>&1; then
+  status=0
+  "build-fuzz/fuzz/fuzz_$target" "$work" "${seeds[@]}" -max_total_time="$seconds" -max_len="$max_len" \
+    -artifact_prefix="build-fuzz/findings/$target-" -print_final_stats=1 >"$log" 2>&1 || status=$?
+  if [ $status -eq 0 ]; then
     runs=$(grep -m1 -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' || echo '?')
     echo "fuzz_$target: ok, $runs executions in ${seconds} s"
   else
-    echo "fuzz_$target: FAILED (see $log)"
+    # A status above 128 with no report in the log is a death by that signal minus 128 that nothing could catch.
+    echo "fuzz_$target: FAILED with status $status (see $log)"
     tail -20 "$log"
     failed=1
   fi

@@ -57,6 +57,30 @@ TEST(CrashGuard, TurnsASegmentationFaultIntoAFailureAndRestoresHandlers) {
   sigaction(SIGINT, &before_int, nullptr);
 }
 
+// Recursion without end, as a reader might follow a cycle of references: each frame keeps a block of its stack.
+// (`never` hides from the compiler that it never ends.)
+volatile int never = -1;
+__attribute__((no_sanitize("address", "undefined"))) int recurse(int depth) {
+  if (depth == never) return 0;
+  volatile char block[4096];
+  block[0] = static_cast<char>(depth);
+  return recurse(depth + 1) + block[0];
+}
+
+TEST(CrashGuard, TurnsAStackOverflowIntoAFailure) {
+  std::string caught;
+  {
+    const CrashGuard guard;
+    try {
+      OCC_CATCH_SIGNALS
+      (void)recurse(0);
+    } catch (const Standard_Failure& e) {
+      caught = e.DynamicType()->Name();
+    }
+  }
+  EXPECT_EQ(caught, "OSD_SIGSEGV");
+}
+
 TEST(CrashGuard, LeavesFloatingPointTrapsOff) {
   const CrashGuard guard;
   volatile double zero = 0.0;

@@ -9,12 +9,17 @@
 // Signal handlers are process-wide: a crash on another thread inside this window also meets OpenCASCADE's
 // handler, so readers run under one lock (cad::read_model's exchange mutex).
 //
+// A stack overflow (deep recursion on a malformed file) is caught too: the handlers run on an alternate signal stack,
+// the thread's own if it has one, else one the guard sets up for its life (without one the kernel cannot deliver
+// the signal and ends the process without a word).
+//
 // Needs OCC_CONVERT_SIGNALS (set for every OpenCASCADE-facing layer in CMakeLists.txt, as OpenCASCADE
 // itself is built on Linux), so that OCC_CATCH_SIGNALS places a jump target.
 
 #include <csignal>
 #include <cfenv>
 #include <iterator>
+#include <memory>
 
 namespace probecomp::occt {
 
@@ -31,6 +36,7 @@ class CrashGuard {
   struct sigaction taken_before_[std::size(kTaken)] {};
   struct sigaction left_before_[std::size(kLeft)] {};
   std::fenv_t fenv_before_{};
+  std::unique_ptr<char[]> alternate_stack_;  // set up by the guard when the thread had none
 };
 
 }  // namespace probecomp::occt
