@@ -344,6 +344,21 @@ struct ExchangeRead {
   std::vector<std::string> warnings;
 };
 
+// An entity OpenCASCADE left out, as a user can find it in the file ("#114 B_SPLINE_SURFACE_WITH_KNOTS",
+// "D171 104 2 ConicArc") where the file holds it, and the first failure its check records. IGES type names and
+// OpenCASCADE's messages come padded: one space between words.
+std::string named_failure(const Interface_InterfaceModel& file, const Handle(Standard_Transient)& entity,
+                          const Interface_Check& check) {
+  std::string text;
+  if (!entity.IsNull() && file.Contains(entity)) {
+    const Handle(TCollection_HAsciiString) label = file.StringLabel(entity);
+    text = std::string(label.IsNull() ? "?" : label->ToCString()) + " " + file.TypeName(entity) + ": ";
+  }
+  if (check.NbFails() > 0) text += check.CFail(1);
+  text.erase(std::unique(text.begin(), text.end(), [](char a, char b) { return a == ' ' && b == ' '; }), text.end());
+  return text;
+}
+
 // OpenCASCADE reads past entities it cannot parse (a broken reference, a wrong type) and leaves them out of
 // the shape; that must not go unsaid. Files from real systems have such errors too (tail_section has four
 // angle units), so it is a warning, not a refusal: the faces read are checked as any others.
@@ -354,10 +369,7 @@ std::vector<std::string> entity_errors(const Interface_InterfaceModel& file) {
     if (!file.IsErrorEntity(i)) continue;
     if (errors++ > 0) continue;
     const Handle(Interface_ReportEntity) report = file.ReportEntity(i);
-    const Handle(Interface_Check) check = report->Check();
-    const Handle(TCollection_HAsciiString) label = file.StringLabel(report->Concerned());
-    first = std::string(label.IsNull() ? "?" : label->ToCString()) + " " + file.TypeName(report->Concerned());
-    if (check->NbFails() > 0) first += ": " + std::string(check->CFail(1));
+    first = named_failure(file, report->Concerned(), *report->Check());
   }
   std::vector<std::string> out;
   if (errors > 0) {
@@ -368,6 +380,19 @@ std::vector<std::string> entity_errors(const Interface_InterfaceModel& file) {
     out.push_back(std::string("OpenCASCADE found the file malformed: ") + file.GlobalCheck()->CFail(1));
   }
   return out;
+}
+
+// Entities that parsed but whose conversion failed (an exception, or a crash CrashGuard turned into one, caught by
+// OpenCASCADE's transfer itself) are missing from the shape too. Of tests/data/cad, only iges_spec_nentity.igs has one.
+std::optional<std::string> transfer_failures(const Interface_InterfaceModel& file, const XSControl_TransferReader& transfer) {
+  int failed = 0;
+  std::string first;
+  for (Interface_CheckIterator c = transfer.TransientProcess()->CheckList(false); c.More(); c.Next()) {
+    if (c.Value()->HasFailed() && failed++ == 0) first = named_failure(file, c.Value()->Entity(), *c.Value());
+  }
+  if (failed == 0) return std::nullopt;
+  return "OpenCASCADE could not convert " + std::to_string(failed) + " of the file's entities and left " +
+         (failed == 1 ? "it" : "them") + " out (first: " + first + ")";
 }
 
 ExchangeRead read_exchange_file(const std::filesystem::path& path, Format format) {
@@ -394,26 +419,7 @@ ExchangeRead read_exchange_file(const std::filesystem::path& path, Format format
     reader.TransferRoots();
     out.shape = reader.OneShape();
     out.transfer = reader.WS()->TransferReader();
-    // An entity that parsed but whose conversion failed (an exception, or a crash CrashGuard turned into one, caught
-    // by OpenCASCADE's transfer itself) is missing from the shape too. The test files have none.
-    int failed = 0;
-    std::string first;
-    const Interface_InterfaceModel& file = *reader.Model();
-    for (Interface_CheckIterator c = out.transfer->TransientProcess()->CheckList(false); c.More(); c.Next()) {
-      if (!c.Value()->HasFailed() || failed++ > 0) continue;
-      const Handle(Standard_Transient) entity = c.Value()->Entity();
-      if (!entity.IsNull() && file.Contains(entity)) {
-        const Handle(TCollection_HAsciiString) label = file.StringLabel(entity);
-        first = std::string(label.IsNull() ? "?" : label->ToCString()) + " " + file.TypeName(entity) + ": ";
-      }
-      first += c.Value()->CFail(1);
-    }
-    // IGES type names come padded ("104 2   ConicArc   "): one space between words.
-    first.erase(std::unique(first.begin(), first.end(), [](char a, char b) { return a == ' ' && b == ' '; }), first.end());
-    if (failed > 0) {
-      out.warnings.push_back("OpenCASCADE could not convert " + std::to_string(failed) + " of the file's entities and left " +
-                             (failed == 1 ? "it" : "them") + " out (first: " + first + ")");
-    }
+    if (std::optional<std::string> w = transfer_failures(*reader.Model(), *out.transfer)) out.warnings.push_back(*w);
   } catch (const Standard_Failure& e) {
     fail(path, std::string("OpenCASCADE failed while reading it: ") + e.GetMessageString());
   }

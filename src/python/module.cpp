@@ -204,7 +204,7 @@ PYBIND11_MODULE(_probecomp, m) {
       .def_property_readonly("units", [](const cad::Model& model) { return model.file_units; })
       .def_property_readonly(
           "read_warnings", [](const cad::Model& model) { return model.read_warnings; },
-          "What the reader left out of the file (entities OpenCASCADE could not parse), one line each; [] for a clean file")
+          "What the reader left out of the file (entities OpenCASCADE could not parse or convert), one line each; [] for a clean file")
       .def_property_readonly("face_names",
                              [](const cad::Model& model) {
                                std::vector<std::string> names;
