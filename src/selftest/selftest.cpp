@@ -65,117 +65,118 @@ Check closest_points(const std::string& name, const nurbs::Surface& s, const std
   return c;
 }
 
-Check closest_point_plane(Random& random) {
+// The four exact shapes the closest-point and offset checks use, each with its signed distance in closed form
+// (positive on the side S_u × S_v points to, outwards).
+struct ExactPlane {
   // Degrees 3 × 2 over 2 × 3 spans, an exact linear map (make_plane_patch), 1.1 m from the origin.
-  const Point3 O(1000, -500, 250);
-  const Vector3 a(100, 0, 20), b(0, 60, -10);
-  const nurbs::Surface s = nurbs::make_plane_patch(O, a, b, 3, 2, 2, 3);
-  const Vector3 n = a.cross(b).normalized();
+  Point3 origin = Point3(1000, -500, 250);
+  Vector3 a = Vector3(100, 0, 20), b = Vector3(0, 60, -10);
+  [[nodiscard]] nurbs::Surface surface() const { return nurbs::make_plane_patch(origin, a, b, 3, 2, 2, 3); }
+  [[nodiscard]] Vector3 normal() const { return a.cross(b).normalized(); }
+  [[nodiscard]] double signed_distance(const Point3& p) const { return (p - origin).dot(normal()); }
+};
+
+struct ExactSphere {
+  Point3 centre = Point3(150, 80, -40);
+  double radius = 12.5;
+  [[nodiscard]] nurbs::Surface surface() const { return nurbs::make_sphere(centre, Vector3(1, 2, 2), radius); }
+  [[nodiscard]] double signed_distance(const Point3& p) const { return (p - centre).norm() - radius; }
+};
+
+struct ExactCylinder {
+  Point3 centre = Point3(-20, 35, 5);
+  Vector3 x = Vector3(1, 1, 0).normalized(), y = Vector3(-1, 1, 1).normalized();
+  double radius = 8.0, height = 40.0;
+  [[nodiscard]] Vector3 axis() const { return x.cross(y); }
+  [[nodiscard]] nurbs::Surface surface() const {
+    return nurbs::make_cylinder_section(centre, x, y, radius, 0.0, 2.0 * std::numbers::pi, height);
+  }
+  [[nodiscard]] double signed_distance(const Point3& p) const {
+    const Vector3 d = p - centre;
+    return (d - d.dot(axis()) * axis()).norm() - radius;
+  }
+};
+
+struct ExactTorus {
+  Point3 centre = Point3(-20, 5, 7);
+  Vector3 axis = Vector3(0, 1, 1).normalized();
+  double major = 30.0, minor = 4.0;
+  [[nodiscard]] nurbs::Surface surface() const { return nurbs::make_torus(centre, axis, major, minor); }
+  // From the tube's centre circle, less the tube's radius.
+  [[nodiscard]] double signed_distance(const Point3& p) const {
+    const Vector3 d = p - centre;
+    return (d - major * (d - d.dot(axis) * axis).normalized()).norm() - minor;
+  }
+};
+
+Check closest_point_plane(Random& random) {
+  const ExactPlane plane;
   std::vector<Point3> queries, feet;
   for (int k = 0; k < 500; ++k) {
-    const Point3 P = O + random.between(0.02, 0.98) * a + random.between(0.02, 0.98) * b;
+    const Point3 P = plane.origin + random.between(0.02, 0.98) * plane.a + random.between(0.02, 0.98) * plane.b;
     feet.push_back(P);
-    queries.push_back(P + random.between(-20.0, 20.0) * n);
+    queries.push_back(P + random.between(-20.0, 20.0) * plane.normal());
   }
-  return closest_points("closest point: plane, degree 3 x 2 (exact NURBS)", s, queries, feet);
+  return closest_points("closest point: plane, degree 3 x 2 (exact NURBS)", plane.surface(), queries, feet);
 }
 
 Check closest_point_sphere(Random& random) {
-  const Point3 c(150, 80, -40);
-  const double R = 12.5;
-  const nurbs::Surface s = nurbs::make_sphere(c, Vector3(1, 2, 2), R);
+  const ExactSphere sphere;
   std::vector<Point3> queries, feet;
   for (int k = 0; k < 500; ++k) {
     const double z = random.between(-1.0, 1.0), phi = random.between(0.0, 2.0 * std::numbers::pi);
     const double rho = std::sqrt(1.0 - z * z);
     const Vector3 u(rho * std::cos(phi), rho * std::sin(phi), z);
-    feet.push_back(c + R * u);
-    queries.push_back(c + random.between(2.0, 40.0) * u);
+    feet.push_back(sphere.centre + sphere.radius * u);
+    queries.push_back(sphere.centre + random.between(2.0, 40.0) * u);
   }
-  return closest_points("closest point: sphere R 12.5 (rational, poles)", s, queries, feet);
+  return closest_points("closest point: sphere R 12.5 (rational, poles)", sphere.surface(), queries, feet);
 }
 
 Check closest_point_cylinder(Random& random) {
-  const Point3 c(-20, 35, 5);
-  const Vector3 X = Vector3(1, 1, 0).normalized(), Y = Vector3(-1, 1, 1).normalized();
-  const Vector3 axis = X.cross(Y);
-  const double R = 8.0, height = 40.0;
-  const nurbs::Surface s = nurbs::make_cylinder_section(c, X, Y, R, 0.0, 2.0 * std::numbers::pi, height);
+  const ExactCylinder cylinder;
   std::vector<Point3> queries, feet;
   for (int k = 0; k < 500; ++k) {
-    const double phi = random.between(0.0, 2.0 * std::numbers::pi), h = random.between(2.0, height - 2.0);
-    const Vector3 u = std::cos(phi) * X + std::sin(phi) * Y;
-    feet.push_back(c + h * axis + R * u);
-    queries.push_back(c + h * axis + random.between(1.0, 30.0) * u);
+    const double phi = random.between(0.0, 2.0 * std::numbers::pi), h = random.between(2.0, cylinder.height - 2.0);
+    const Vector3 u = std::cos(phi) * cylinder.x + std::sin(phi) * cylinder.y;
+    const Point3 on_axis = cylinder.centre + h * cylinder.axis();
+    feet.push_back(on_axis + cylinder.radius * u);
+    queries.push_back(on_axis + random.between(1.0, 30.0) * u);
   }
-  return closest_points("closest point: cylinder R 8 (rational)", s, queries, feet);
+  return closest_points("closest point: cylinder R 8 (rational)", cylinder.surface(), queries, feet);
 }
 
 Check closest_point_torus(Random& random) {
-  const Point3 c(-20, 5, 7);
-  const Vector3 a = Vector3(0, 1, 1).normalized(), S = a.unitOrthogonal(), T = a.cross(S);
-  const double R = 30.0, r = 4.0;
-  const nurbs::Surface s = nurbs::make_torus(c, a, R, r);
+  const ExactTorus torus;
+  const Vector3 S = torus.axis.unitOrthogonal(), T = torus.axis.cross(S);
   std::vector<Point3> queries, feet;
   for (int k = 0; k < 500; ++k) {
     const double phi = random.between(0.0, 2.0 * std::numbers::pi), theta = random.between(0.0, 2.0 * std::numbers::pi);
     const Vector3 radial = std::cos(phi) * S + std::sin(phi) * T;
-    const Point3 m = c + R * radial;  // the tube's centre circle
-    const Vector3 d = std::cos(theta) * radial + std::sin(theta) * a;
-    feet.push_back(m + r * d);
+    const Point3 m = torus.centre + torus.major * radial;  // the tube's centre circle
+    const Vector3 d = std::cos(theta) * radial + std::sin(theta) * torus.axis;
+    feet.push_back(m + torus.minor * d);
     queries.push_back(m + random.between(0.5, 12.0) * d);
   }
-  return closest_points("closest point: torus R 30, r 4 (rational)", s, queries, feet);
+  return closest_points("closest point: torus R 30, r 4 (rational)", torus.surface(), queries, feet);
 }
 
-// The offset of an exact NURBS sphere or torus is a sphere or torus: its distance from the centre (circle).
-Check offset(const std::string& name, const nurbs::Surface& s, double d,
-             const std::function<double(const Point3&)>& true_distance_error) {
+// The offset of an exact plane, sphere, cylinder or torus by d is the same shape d farther out: every point of the
+// offset NURBS must be at signed distance d from the shape.
+template <class Shape>
+Check offset(const std::string& name, const Shape& shape, double d) {
   const fitting::OffsetOptions options;
-  const fitting::OffsetResult r = fitting::offset_surface(s, d, options);
+  const fitting::OffsetResult r = fitting::offset_surface(shape.surface(), d, options);
   Check c = check(name, options.tolerance);
   if (!r.ok()) return failed(name, c.limit, std::string("the offset ended ") + fitting::to_string(r.status));
   const nurbs::Domain D = r.surface.domain();
   for (int i = 0; i <= 60; ++i) {
     for (int j = 0; j <= 60; ++j) {
       const Point3 P = nurbs::evaluate(r.surface, D.u0 + (D.u1 - D.u0) * i / 60.0, D.v0 + (D.v1 - D.v0) * j / 60.0);
-      c.error = std::max(c.error, std::abs(true_distance_error(P)));
+      c.error = std::max(c.error, std::abs(shape.signed_distance(P) - d));
     }
   }
   return c;
-}
-
-Check offset_plane() {
-  const Point3 O(1000, -500, 250);
-  const Vector3 a(100, 0, 20), b(0, 60, -10), n = a.cross(b).normalized();
-  return offset("offset: plane, degree 3 x 2, by +2 (is the plane 2 mm out)", nurbs::make_plane_patch(O, a, b, 3, 2, 2, 3),
-                2.0, [&](const Point3& P) { return (P - O).dot(n) - 2.0; });
-}
-
-Check offset_cylinder() {
-  const Point3 c(-20, 35, 5);
-  const Vector3 X = Vector3(1, 1, 0).normalized(), Y = Vector3(-1, 1, 1).normalized(), axis = X.cross(Y);
-  return offset("offset: cylinder R 8 by +1.5 (is R 9.5)",
-                nurbs::make_cylinder_section(c, X, Y, 8.0, 0.0, 2.0 * std::numbers::pi, 40.0), 1.5, [&](const Point3& P) {
-                  const Vector3 d = P - c;
-                  return (d - d.dot(axis) * axis).norm() - 9.5;
-                });
-}
-
-Check offset_sphere() {
-  const Point3 c(150, 80, -40);
-  return offset(("offset: sphere R 12.5 by +1.5 (is R 14)"), nurbs::make_sphere(c, Vector3(1, 2, 2), 12.5), 1.5,
-                [&](const Point3& P) { return (P - c).norm() - 14.0; });
-}
-
-Check offset_torus() {
-  const Point3 c(-20, 5, 7);
-  const Vector3 a = Vector3(0, 1, 1).normalized();
-  return offset("offset: torus R 30, r 4 by -1 (is r 3)", nurbs::make_torus(c, a, 30.0, 4.0), -1.0, [&](const Point3& P) {
-    const Vector3 d = P - c;
-    const Vector3 in_plane = d - d.dot(a) * a;
-    return (d - 30.0 * in_plane.normalized()).norm() - 3.0;
-  });
 }
 
 // Exact points of the free-form panel, fitted from a start with every control point at the origin (same
@@ -375,10 +376,13 @@ std::vector<Check> run_selftest(const std::function<void(const Check&)>& done) {
   one("closest point: sphere", kClosestPointLimit, [] { Random r{2}; return closest_point_sphere(r); });
   one("closest point: cylinder", kClosestPointLimit, [] { Random r{3}; return closest_point_cylinder(r); });
   one("closest point: torus", kClosestPointLimit, [] { Random r{4}; return closest_point_torus(r); });
-  one("offset: plane", fitting::OffsetOptions{}.tolerance, offset_plane);
-  one("offset: cylinder", fitting::OffsetOptions{}.tolerance, offset_cylinder);
-  one("offset: sphere", fitting::OffsetOptions{}.tolerance, offset_sphere);
-  one("offset: torus", fitting::OffsetOptions{}.tolerance, offset_torus);
+  const double offset_tolerance = fitting::OffsetOptions{}.tolerance;
+  one("offset: plane", offset_tolerance,
+      [] { return offset("offset: plane, degree 3 x 2, by +2 (is the plane 2 mm out)", ExactPlane{}, 2.0); });
+  one("offset: cylinder", offset_tolerance,
+      [] { return offset("offset: cylinder R 8 by +1.5 (is R 9.5)", ExactCylinder{}, 1.5); });
+  one("offset: sphere", offset_tolerance, [] { return offset("offset: sphere R 12.5 by +1.5 (is R 14)", ExactSphere{}, 1.5); });
+  one("offset: torus", offset_tolerance, [] { return offset("offset: torus R 30, r 4 by -1 (is r 3)", ExactTorus{}, -1.0); });
   one("fit: exact data", kExactFitLimit, exact_fit);
   one("registration: known motion", kRegistrationLimit, registration_of_known_motion);
   guarded("stored free-form case", kStoredCaseRms, stored_case_checks);
