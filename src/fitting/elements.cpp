@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace probecomp::fitting {
@@ -74,6 +75,25 @@ Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> principal_directions(const Centre
 }
 
 double rms_of(const Eigen::VectorXd& d) { return std::sqrt(d.squaredNorm() / static_cast<double>(d.size())); }
+
+// Kåsa's algebraic fit of a circle (2 columns) or sphere (3 columns) to the rows of X: |x|² = 2 c·x + (r² − |c|²),
+// linear in c and r² − |c|². The start of the geometric fits; none when the points do not fix it.
+struct Algebraic {
+  Eigen::VectorXd centre;
+  double radius = 0.0;
+};
+std::optional<Algebraic> algebraic_fit(const Eigen::MatrixXd& X) {
+  const Eigen::Index dim = X.cols();
+  Eigen::MatrixXd A(X.rows(), dim + 1);
+  A << 2.0 * X, Eigen::VectorXd::Ones(X.rows());
+  const Eigen::VectorXd b = X.rowwise().squaredNorm();
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  if (qr.rank() < dim + 1) return std::nullopt;
+  const Eigen::VectorXd s = qr.solve(b);
+  Algebraic out{s.head(dim), 0.0};
+  out.radius = std::sqrt(std::max(s(dim) + out.centre.squaredNorm(), 0.0));
+  return out;
+}
 
 // A rotation taking `axis` (unit) to +z.
 Eigen::Matrix3d to_z(const Vector3& axis) {
@@ -156,19 +176,12 @@ SphereFit fit_sphere(std::span<const Point3> points) {
   if (points.size() < 4) return f;
   const Centred c = centre(points);
   const Eigen::Index n = static_cast<Eigen::Index>(c.p.size());
-  // Algebraic start: |x|² = 2 c·x + (r² − |c|²), linear in (c, r² − |c|²).
-  Eigen::MatrixXd A(n, 4);
-  Eigen::VectorXd b(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Vector3& x = c.p[static_cast<std::size_t>(i)];
-    A.row(i) << 2.0 * x.x(), 2.0 * x.y(), 2.0 * x.z(), 1.0;
-    b(i) = x.squaredNorm();
-  }
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> start(A);
-  if (start.rank() < 4) return f;
-  const Eigen::Vector4d s = start.solve(b);
-  Vector3 centre_estimate = s.head<3>();
-  double radius = std::sqrt(std::max(s(3) + centre_estimate.squaredNorm(), 0.0));
+  Eigen::MatrixXd X(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) X.row(i) = c.p[static_cast<std::size_t>(i)].transpose();
+  const std::optional<Algebraic> start = algebraic_fit(X);
+  if (!start) return f;
+  Vector3 centre_estimate = start->centre;
+  double radius = start->radius;
   // Gauss-Newton on d_i = |x_i − c| − r, derivatives (−(x_i − c)/|x_i − c|, −1).
   const auto linearise = [&](Eigen::MatrixXd& J, Eigen::VectorXd& d) {
     for (Eigen::Index i = 0; i < n; ++i) {
@@ -202,22 +215,18 @@ CylinderFit fit_cylinder(std::span<const Point3> points) {
   const auto eig = principal_directions(c);
   for (int k = 2; k >= 0; --k) {
     const Vector3 axis = eig.eigenvectors().col(k).normalized();
-    // Start: the algebraic circle fit of the points projected along this axis, s² + t² = 2as + 2bt + c (an arc's
-    // centre is far from its centroid, so the centroid would be a poor start).
+    // Start: the algebraic circle fit of the points projected along this axis (an arc's centre is far from its
+    // centroid, so the centroid would be a poor start).
     const Vector3 e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
-    Eigen::MatrixXd A(static_cast<Eigen::Index>(c.p.size()), 3);
-    Eigen::VectorXd rhs(A.rows());
-    for (Eigen::Index i = 0; i < A.rows(); ++i) {
+    Eigen::MatrixXd X(static_cast<Eigen::Index>(c.p.size()), 2);
+    for (Eigen::Index i = 0; i < X.rows(); ++i) {
       const Vector3& x = c.p[static_cast<std::size_t>(i)];
-      const double s = x.dot(e1), t = x.dot(e2);
-      A.row(i) << 2.0 * s, 2.0 * t, 1.0;
-      rhs(i) = s * s + t * t;
+      X.row(i) << x.dot(e1), x.dot(e2);
     }
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> circle(A);
-    if (circle.rank() < 3) continue;
-    const Eigen::Vector3d abc = circle.solve(rhs);
-    const double radius = std::sqrt(std::max(abc(2) + abc(0) * abc(0) + abc(1) * abc(1), 0.0));
-    const Point3 through = Point3::Zero() + abc(0) * e1 + abc(1) * e2;
+    const std::optional<Algebraic> circle = algebraic_fit(X);
+    if (!circle) continue;
+    const Point3 through = Point3::Zero() + circle->centre(0) * e1 + circle->centre(1) * e2;
+    const double radius = circle->radius;
     const CylinderFit f = cylinder_from(c, axis, through, radius);
     const bool better = f.status == ElementFitStatus::OK &&
                         (best.status != ElementFitStatus::OK || f.rms < best.rms);
