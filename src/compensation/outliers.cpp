@@ -5,20 +5,23 @@
 
 namespace probecomp::compensation {
 
-double outlier_bound(const fitting::AdaptiveFitResult& fit, double weight, std::size_t k, const OutlierTest& test) {
+double outlier_bound(const fitting::AdaptiveFitResult& fit, double weight, std::size_t k, const OutlierTest& test,
+                     Spread spread) {
   const double v = fit.variance_factor.empty() ? 0.0 : fit.variance_factor[k];
   // In the fit: Var(r_k) = σ²(1 − h_k); left out: Var(r_k) = σ²(1 + v_k). The leverage is kept below 0.95 so that
   // a point the fit interpolates still has a bound of a fifth of its noise, not zero.
   const double factor = weight > 0.0 ? std::sqrt(std::max(1.0 - weight * v, 0.05)) : std::sqrt(1.0 + v);
-  return std::max(test.sigmas * fit.noise_sigma * factor, test.min_residual);
+  const double sigma = spread == Spread::Local && !fit.local_spread.empty() ? std::max(fit.local_spread[k], fit.noise_sigma)
+                                                                          : fit.noise_sigma;
+  return std::max(test.sigmas * sigma * factor, test.min_residual);
 }
 
 std::vector<char> outliers_against_fit(const fitting::AdaptiveFitResult& fit, std::span<const double> weights,
-                                       const OutlierTest& test) {
+                                       const OutlierTest& test, Spread spread) {
   std::vector<char> out(fit.residuals.size(), 0);
   for (std::size_t k = 0; k < out.size(); ++k) {
     const double w = weights.empty() ? 1.0 : weights[k];
-    out[k] = std::abs(fit.residuals[k]) > outlier_bound(fit, w, k, test);
+    out[k] = std::abs(fit.residuals[k]) > outlier_bound(fit, w, k, test, spread);
   }
   return out;
 }

@@ -144,6 +144,7 @@ void per_member(fitting::AdaptiveFitResult& fit, std::span<const std::uint32_t> 
   expand(fit.residuals);
   expand(fit.variance_factor);
   expand(fit.misfit);
+  expand(fit.local_spread);
 }
 
 // What the user must know about a registration: its notes, an iteration limit reached, and the motions the data
@@ -537,7 +538,9 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
         // may have followed the gross errors it then found, and would keep their marks.
         refit(start, params);
         if (!fit->fitted()) break;
-        outlier = outliers_against_fit(*fit, weights, options.outliers);
+        // The first fit, gross errors and all, against the face's noise; the refits without them against the
+        // spread around each point (compensation/outliers.hpp).
+        outlier = outliers_against_fit(*fit, weights, options.outliers, attempt == 0 ? Spread::Face : Spread::Local);
         int changed = 0;
         double largest = 0.0;
         for (std::size_t i = 0; i < pts.size(); ++i) {

@@ -81,6 +81,47 @@ int span_of(const std::vector<double>& breaks, double t) {
   return std::clamp(s, 0, static_cast<int>(breaks.size()) - 2);
 }
 
+// Each point's local_spread (AdaptiveFitResult): 1.4826 × the median |standardised residual| over the points in
+// its span and the eight around it, never below `sigma`. Each span's neighbourhood is gathered and its median
+// taken on its own (in parallel, the same whatever the thread count).
+std::vector<double> local_spread(std::span<const double> standardised, std::span<const double> weights,
+                                 std::span<const std::uint32_t> span, std::size_t nsu, std::size_t nsv, double sigma) {
+  // The points' |standardised residuals| grouped by span (a counting sort), in-fit points only.
+  std::vector<std::size_t> start(nsu * nsv + 1, 0);
+  for (std::size_t k = 0; k < span.size(); ++k) {
+    if (weights.empty() || weights[k] > 0.0) ++start[span[k] + 1];
+  }
+  for (std::size_t s = 0; s < nsu * nsv; ++s) start[s + 1] += start[s];
+  std::vector<double> grouped(start.back());
+  {
+    std::vector<std::size_t> next(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < span.size(); ++k) {
+      if (weights.empty() || weights[k] > 0.0) grouped[next[span[k]]++] = std::abs(standardised[k]);
+    }
+  }
+  std::vector<double> by_span(nsu * nsv, sigma);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nsu * nsv, 64), [&](const auto& range) {
+    std::vector<double> around;
+    for (std::size_t s = range.begin(); s != range.end(); ++s) {
+      const std::size_t a = s / nsv, b = s % nsv;
+      around.clear();
+      for (std::size_t a2 = a > 0 ? a - 1 : 0; a2 <= std::min(a + 1, nsu - 1); ++a2) {
+        for (std::size_t b2 = b > 0 ? b - 1 : 0; b2 <= std::min(b + 1, nsv - 1); ++b2) {
+          const std::size_t s2 = a2 * nsv + b2;
+          around.insert(around.end(), grouped.begin() + static_cast<std::ptrdiff_t>(start[s2]),
+                        grouped.begin() + static_cast<std::ptrdiff_t>(start[s2 + 1]));
+        }
+      }
+      if (around.size() >= static_cast<std::size_t>(kMinLocalPoints)) {
+        by_span[s] = std::max(kMadToSigma * median_in_place(around), sigma);
+      }
+    }
+  });
+  std::vector<double> out(span.size());
+  for (std::size_t k = 0; k < span.size(); ++k) out[k] = by_span[span[k]];
+  return out;
+}
+
 }  // namespace
 
 std::vector<std::uint32_t> nearest_neighbours(std::span<const Point3> points) {
@@ -324,14 +365,13 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
         }
       }
     }
-    if (result.spans_above_noise == 0) {
-      result.status = AdaptiveFitResult::Status::OK;
-      return result;
-    }
-    if (round == options.max_rounds) {
-      result.status = AdaptiveFitResult::Status::NoiseNotReached;
-      return result;
-    }
+    auto finish = [&](AdaptiveFitResult::Status status) {
+      result.status = status;
+      result.local_spread = local_spread(standardised, weights, span, nsu, nsv, result.noise_sigma);
+      return std::move(result);
+    };
+    if (result.spans_above_noise == 0) return finish(AdaptiveFitResult::Status::OK);
+    if (round == options.max_rounds) return finish(AdaptiveFitResult::Status::NoiseNotReached);
     // The unexplained spans' penalty goes down a decade (to a floor: the energy still holds what no point fixes).
     // And everywhere, the penalty follows the fit's own roughness (a pilot estimate, as in spatially adaptive
     // smoothing splines: Ruppert and Carroll 2000, Pintore, Speckman and Holmes 2006): a span k times rougher
@@ -366,10 +406,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       xu.clear();
       xv.clear();
     }
-    if (xu.empty() && xv.empty() && !lowered) {
-      result.status = AdaptiveFitResult::Status::NoiseNotReached;
-      return result;
-    }
+    if (xu.empty() && xv.empty() && !lowered) return finish(AdaptiveFitResult::Status::NoiseNotReached);
     if (!xu.empty()) target = nurbs::refine_knots_u(target, xu);
     if (!xv.empty()) target = nurbs::refine_knots_v(target, xv);
     // Each new span inherits the weight of the span it was cut from.

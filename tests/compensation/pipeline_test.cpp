@@ -462,3 +462,104 @@ TEST(Pipeline, GrossOutliersMoveNoOtherPoint) {
 
 }  // namespace
 }  // namespace probecomp
+
+namespace probecomp {
+namespace {
+
+// The distance of each point's contact from the true (actual) part, against its stated uncertainty, for the points
+// not moved; and whether each moved point was flagged.
+struct AgainstTruth {
+  double worst = 0.0;          // mm
+  double worst_in_u = 0.0;     // largest error / u
+  int good_flagged = 0;        // points not moved but flagged as outliers
+  int moved_missed = 0;        // moved points not flagged
+};
+AgainstTruth against_truth(const compensation::CompensationResult& r, const cad::ModelLocator& actual,
+                           const std::vector<char>& moved) {
+  AgainstTruth t;
+  for (std::size_t i = 0; i < r.points.size(); ++i) {
+    const bool flagged = r.points[i].status == compensation::PointStatus::Outlier;
+    if (moved[i]) {
+      t.moved_missed += !flagged;
+      continue;
+    }
+    t.good_flagged += flagged;
+    const double e = std::abs(actual.closest_point(r.points[i].contact).distance);
+    t.worst = std::max(t.worst, e);
+    t.worst_in_u = std::max(t.worst_in_u, e / r.points[i].uncertainty);
+  }
+  return t;
+}
+
+// Issue 25 at every noise level: on the paper's grid (120 × 60) with 1 % of the points moved 0.1–5 mm, at σ = 0.5
+// and 4.5 µm, three seeds: every moved point is flagged, no other point is, and every other point's contact is
+// within 5 stated uncertainties of the true part. It guards the first fit's verdict against the face's noise
+// (compensation/outliers.hpp): judged against the spread around each point like the refits, the first fit's pull
+// towards a cluster of errors hid a 0.674 mm error among them (σ = 4.5 µm, seed 1), which the refits then
+// followed (a contact 114 µm from the true part).
+TEST(Pipeline, GrossOutliersAtLowAndHighNoise) {
+  simulation::FreeformCase c = simulation::paper_freeform_case();
+  const cad::Model actual = simulation::actual_model(c.nominal, c.deformation, c.placement);
+  const cad::ModelLocator locator(actual);
+  const std::vector<simulation::ProgrammedPoint> plan = simulation::grid_plan(c.nominal.faces.front(), 120, 60);
+  compensation::CompensateOptions o;
+  o.probe_radius = c.probe_radius;
+  for (const double sigma : {0.0005, 0.0045}) {
+    for (const std::uint64_t seed : {1u, 2u, 3u}) {
+      SCOPED_TRACE(testing::Message() << "sigma " << sigma << " seed " << seed);
+      std::vector<Point3> points;
+      for (const simulation::Touch& t : simulation::simulate_touches(
+               locator, plan, {.probe_radius = c.probe_radius, .noise_sigma = sigma, .seed = seed})) {
+        points.push_back(t.measured);
+      }
+      std::mt19937_64 rng(seed);
+      std::vector<std::size_t> order(points.size());
+      for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+      std::shuffle(order.begin(), order.end(), rng);
+      std::vector<char> moved(points.size(), 0);
+      std::uniform_real_distribution<double> size(0.1, 5.0);
+      for (std::size_t k = 0; k < points.size() / 100; ++k) {
+        moved[order[k]] = 1;
+        points[order[k]] += (rng() % 2 ? 1.0 : -1.0) * size(rng) * plan[order[k]].normal;
+      }
+      const AgainstTruth t = against_truth(compensation::compensate(c.nominal, points, std::nullopt, o), locator, moved);
+      std::printf("sigma %.1f um seed %d: worst error %.2f um (%.2f u); %d good points flagged, %d moved missed\n",
+                  sigma * 1e3, static_cast<int>(seed), t.worst * 1e3, t.worst_in_u, t.good_flagged, t.moved_missed);
+      EXPECT_EQ(t.moved_missed, 0);
+      EXPECT_EQ(t.good_flagged, 0);
+      EXPECT_LE(t.worst_in_u, 5.0);
+    }
+  }
+}
+
+// At low noise on a grid too coarse for the dent (60 × 30, σ = 0.5 µm), the fit cannot follow it and its residuals
+// there are tens of micrometres, far beyond 5σ: judged against the face's noise alone at every fit, the dent's points
+// were left out as outliers, the refits without them swung through the hole they left (a contact 1.06 mm from the
+// true part, seed 1), and the next verdicts left out more. Against the spread around each point, they stay in: the
+// largest error is the dent's own misfit, 45 µm. (Its stated u is still about a tenth of that at the dent's worst
+// points: 8.6–10.3 u; not bounded here.)
+TEST(Pipeline, UnfollowedShapeAtLowNoiseIsNotPeeledOff) {
+  simulation::FreeformCase c = simulation::paper_freeform_case();
+  const cad::Model actual = simulation::actual_model(c.nominal, c.deformation, c.placement);
+  const cad::ModelLocator locator(actual);
+  const std::vector<simulation::ProgrammedPoint> plan = simulation::grid_plan(c.nominal.faces.front(), 60, 30);
+  compensation::CompensateOptions o;
+  o.probe_radius = c.probe_radius;
+  for (const std::uint64_t seed : {1u, 2u, 3u}) {
+    SCOPED_TRACE(seed);
+    std::vector<Point3> points;
+    for (const simulation::Touch& t :
+         simulation::simulate_touches(locator, plan, {.probe_radius = c.probe_radius, .noise_sigma = 0.0005, .seed = seed})) {
+      points.push_back(t.measured);
+    }
+    const AgainstTruth t =
+        against_truth(compensation::compensate(c.nominal, points, std::nullopt, o), locator, std::vector<char>(points.size(), 0));
+    std::printf("seed %d: worst error %.2f um (%.2f u); %d points flagged\n", static_cast<int>(seed), t.worst * 1e3,
+                t.worst_in_u, t.good_flagged);
+    EXPECT_LE(t.worst, 0.060);
+    EXPECT_LE(t.good_flagged, 10);
+  }
+}
+
+}  // namespace
+}  // namespace probecomp

@@ -8,6 +8,14 @@
 // test allows for it), σ̂·√(1 + v_k) for a point left out (its residual is then a prediction error: the noise plus
 // the fit's own uncertainty there). σ̂ is the fit's robust noise estimate; its floor, `min_residual`, keeps
 // exact data from collapsing the bound to the fit's own model error.
+//
+// σ̂ is the face's noise, or the spread of the residuals around the point where that is larger
+// (AdaptiveFitResult::local_spread): where the fit cannot follow the shape (a feature the data support no more
+// control points for, at low noise), its residuals are the shape's, several points deep, and a point that does not
+// stand out from them is no gross error. But a fit with gross errors in it is pulled towards them over their
+// neighbourhoods, whose spread they inflate enough to hide a smaller error nearby: a face's first fit is judged
+// against its noise alone (Spread::Face), which leaves out every point the fit does not explain; the refits, made
+// without those, judge against the local spread (Spread::Local) and take back the points that do not stand out.
 
 #include <span>
 #include <vector>
@@ -25,12 +33,19 @@ struct OutlierTest {
   double min_residual = 0.002;
 };
 
+// What a residual is measured against (see above).
+enum class Spread {
+  Face,   // the face's noise estimate
+  Local,  // the larger of that and the spread of the residuals around the point
+};
+
 // Per point of `fit` (weights as given to it: zero for points left out), 1 where the point is an outlier.
 [[nodiscard]] std::vector<char> outliers_against_fit(const fitting::AdaptiveFitResult& fit,
-                                                     std::span<const double> weights, const OutlierTest& test = {});
+                                                     std::span<const double> weights, const OutlierTest& test = {},
+                                                     Spread spread = Spread::Local);
 
 // The bound |residual| must exceed for point k to be an outlier, mm.
 [[nodiscard]] double outlier_bound(const fitting::AdaptiveFitResult& fit, double weight, std::size_t k,
-                                   const OutlierTest& test = {});
+                                   const OutlierTest& test = {}, Spread spread = Spread::Local);
 
 }  // namespace probecomp::compensation

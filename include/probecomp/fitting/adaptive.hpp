@@ -53,6 +53,10 @@ struct AdaptiveFitOptions {
   double min_points_per_control_point_noise_free = 1.25;
 };
 
+// Fewer points than this around a point (its span and the eight around it) give no median worth the name: their
+// spread is taken as the face's noise estimate.
+inline constexpr int kMinLocalPoints = 9;
+
 struct AdaptiveFitResult {
   enum class Status {
     OK,               // every span's residuals are consistent with the noise estimate
@@ -80,6 +84,12 @@ struct AdaptiveFitResult {
   // largest of the residuals' mean over the point's neighbourhood of spans less its variance, their significant
   // mean-square excess there, and the penalty's own bias at the point, PenalizedFitResult::smoothing_bias).
   std::vector<double> misfit{};
+  // Per point: the spread of the fit's standardised residuals around the point, mm: 1.4826 × their median |r|
+  // over the points of its knot span and the eight around it (weights > 0), never below noise_sigma; noise_sigma
+  // where those hold fewer than kMinLocalPoints. The noise where the fit follows the shape; the misfit where it
+  // cannot (a feature the data support no more control points for): what a point must stand out from to be a
+  // gross error. A median: a lone gross error among its neighbours does not move it.
+  std::vector<double> local_spread{};
 
   [[nodiscard]] bool ok() const { return status == Status::OK; }
   // A surface was fitted (OK or NoiseNotReached): `surface`, `params` and `residuals` describe it.
