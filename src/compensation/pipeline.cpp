@@ -144,7 +144,6 @@ void per_member(fitting::AdaptiveFitResult& fit, std::span<const std::uint32_t> 
   expand(fit.residuals);
   expand(fit.variance_factor);
   expand(fit.misfit);
-  expand(fit.local_spread);
 }
 
 // What the user must know about a registration: its notes, an iteration limit reached, and the motions the data

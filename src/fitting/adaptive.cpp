@@ -81,27 +81,28 @@ int span_of(const std::vector<double>& breaks, double t) {
   return std::clamp(s, 0, static_cast<int>(breaks.size()) - 2);
 }
 
-// Each point's local_spread (AdaptiveFitResult): 1.4826 × the median |standardised residual| over the points in
-// its span and the eight around it, never below `sigma`. Each span's neighbourhood is gathered and its median
-// taken on its own (in parallel, the same whatever the thread count).
-std::vector<double> local_spread(std::span<const double> standardised, std::span<const double> weights,
-                                 std::span<const std::uint32_t> span, std::size_t nsu, std::size_t nsv, double sigma) {
-  // The points' |standardised residuals| grouped by span (a counting sort), in-fit points only.
+// Each span's spread (AdaptiveFitResult::span_spread): 1.4826 × the median |standardised residual| over the points
+// in it and the eight around it, never below `sigma`. Each span's neighbourhood is gathered and its median taken on
+// its own (in parallel, the same whatever the thread count).
+std::vector<double> span_spread(std::span<const double> standardised, std::span<const double> weights,
+                                std::span<const std::uint32_t> span, std::size_t nsu, std::size_t nsv, double sigma) {
+  // The points' |standardised residuals| grouped by span (a counting sort), in-fit points only; in single precision,
+  // which a median of a spread needs no more than (a million points: 4 MB for the while).
   std::vector<std::size_t> start(nsu * nsv + 1, 0);
   for (std::size_t k = 0; k < span.size(); ++k) {
     if (weights.empty() || weights[k] > 0.0) ++start[span[k] + 1];
   }
   for (std::size_t s = 0; s < nsu * nsv; ++s) start[s + 1] += start[s];
-  std::vector<double> grouped(start.back());
+  std::vector<float> grouped(start.back());
   {
     std::vector<std::size_t> next(start.begin(), start.end() - 1);
     for (std::size_t k = 0; k < span.size(); ++k) {
-      if (weights.empty() || weights[k] > 0.0) grouped[next[span[k]]++] = std::abs(standardised[k]);
+      if (weights.empty() || weights[k] > 0.0) grouped[next[span[k]]++] = static_cast<float>(std::abs(standardised[k]));
     }
   }
   std::vector<double> by_span(nsu * nsv, sigma);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nsu * nsv, 64), [&](const auto& range) {
-    std::vector<double> around;
+    std::vector<double> around;  // in double for median_in_place
     for (std::size_t s = range.begin(); s != range.end(); ++s) {
       const std::size_t a = s / nsv, b = s % nsv;
       around.clear();
@@ -117,12 +118,19 @@ std::vector<double> local_spread(std::span<const double> standardised, std::span
       }
     }
   });
-  std::vector<double> out(span.size());
-  for (std::size_t k = 0; k < span.size(); ++k) out[k] = by_span[span[k]];
-  return out;
+  return by_span;
 }
 
 }  // namespace
+
+double local_spread(const AdaptiveFitResult& fit, std::size_t k) {
+  const std::vector<double> bu = fit.surface.U().breakpoints();
+  const std::vector<double> bv = fit.surface.V().breakpoints();
+  const std::size_t nsv = bv.size() - 1;
+  const std::size_t s = static_cast<std::size_t>(span_of(bu, fit.params[k].u)) * nsv +
+                        static_cast<std::size_t>(span_of(bv, fit.params[k].v));
+  return s < fit.span_spread.size() ? fit.span_spread[s] : fit.noise_sigma;
+}
 
 std::vector<std::uint32_t> nearest_neighbours(std::span<const Point3> points) {
   return geometry::nearest_others(points, 1);
@@ -367,7 +375,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     }
     auto finish = [&](AdaptiveFitResult::Status status) {
       result.status = status;
-      result.local_spread = local_spread(standardised, weights, span, nsu, nsv, result.noise_sigma);
+      result.span_spread = span_spread(standardised, weights, span, nsu, nsv, result.noise_sigma);
       return std::move(result);
     };
     if (result.spans_above_noise == 0) return finish(AdaptiveFitResult::Status::OK);

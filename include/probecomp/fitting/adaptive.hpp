@@ -84,12 +84,13 @@ struct AdaptiveFitResult {
   // largest of the residuals' mean over the point's neighbourhood of spans less its variance, their significant
   // mean-square excess there, and the penalty's own bias at the point, PenalizedFitResult::smoothing_bias).
   std::vector<double> misfit{};
-  // Per point: the spread of the fit's standardised residuals around the point, mm: 1.4826 × their median |r|
-  // over the points of its knot span and the eight around it (weights > 0), never below noise_sigma; noise_sigma
-  // where those hold fewer than kMinLocalPoints. The noise where the fit follows the shape; the misfit where it
-  // cannot (a feature the data support no more control points for): what a point must stand out from to be a
-  // gross error. A median: a lone gross error among its neighbours does not move it.
-  std::vector<double> local_spread{};
+  // Per knot span of `surface` (u-major, as its breakpoints): the spread of the fit's standardised residuals around
+  // it, mm: 1.4826 × their median |r| over the points of the span and the eight around it (weights > 0), never
+  // below noise_sigma; noise_sigma where those hold fewer than kMinLocalPoints. The noise where the fit follows the
+  // shape; the misfit where it cannot (a feature the data support no more control points for): what a point must
+  // stand out from to be a gross error. A median: a lone gross error among its neighbours does not move it.
+  // Per span, not per point: a million points would need 8 MB for what a few thousand spans hold.
+  std::vector<double> span_spread{};
 
   [[nodiscard]] bool ok() const { return status == Status::OK; }
   // A surface was fitted (OK or NoiseNotReached): `surface`, `params` and `residuals` describe it.
@@ -116,6 +117,10 @@ struct AdaptiveFitResult {
 // part of the noise the fit absorbs. Points with zero weight are left out.
 [[nodiscard]] double robust_noise_sigma(std::span<const double> residuals, std::span<const double> weights,
                                         int unknowns_per_coordinate);
+
+// The spread of the residuals around point k of `fit` (AdaptiveFitResult::span_spread at the point's span), mm;
+// noise_sigma when the fit has none.
+[[nodiscard]] double local_spread(const AdaptiveFitResult& fit, std::size_t k);
 
 // Each point's nearest other point in space (k-d tree), for neighbour_noise_sigma.
 [[nodiscard]] std::vector<std::uint32_t> nearest_neighbours(std::span<const Point3> points);
