@@ -401,6 +401,25 @@ namespace {
 // 2 stated uncertainties (bounded here at 3). Their contact points can slide further along the surface (14.7, 30.3,
 // 1.2 µm) on the dent's flanks, which this grid barely resolves: the fitted normal there follows which points the
 // fit has (printed, not bounded; the distance from the true surface stays within the points' u).
+// 1 % of the points, chosen by `seed`, moved 0.1–5 mm along their programmed normal, out or in: the probe's
+// direction of travel, where a dirty tip or a vibration puts a reading's error (a move along the surface would only
+// be a reading of another place). Returns which were moved.
+std::vector<char> move_one_percent(std::vector<Point3>& points, const std::vector<simulation::ProgrammedPoint>& plan,
+                                   std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<std::size_t> order(points.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::shuffle(order.begin(), order.end(), rng);
+  std::vector<char> moved(points.size(), 0);
+  std::uniform_real_distribution<double> size(0.1, 5.0);
+  for (std::size_t k = 0; k < points.size() / 100; ++k) {
+    const std::size_t i = order[k];
+    moved[i] = 1;
+    points[i] += (rng() % 2 ? 1.0 : -1.0) * size(rng) * plan[i].normal;
+  }
+  return moved;
+}
+
 TEST(Pipeline, GrossOutliersMoveNoOtherPoint) {
   simulation::FreeformCase c = simulation::paper_freeform_case();
   const cad::Model actual = simulation::actual_model(c.nominal, c.deformation, c.placement);
@@ -416,20 +435,8 @@ TEST(Pipeline, GrossOutliersMoveNoOtherPoint) {
       ASSERT_EQ(t.status, simulation::Touch::Status::OK);
       clean.push_back(t.measured);
     }
-    std::mt19937_64 rng(seed);
-    std::vector<std::size_t> order(clean.size());
-    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::shuffle(order.begin(), order.end(), rng);
-    std::vector<char> moved(clean.size(), 0);
     std::vector<Point3> contaminated = clean;
-    // Along the programmed normal, out or in: the probe's direction of travel, where a dirty tip or a vibration
-    // puts a reading's error (a move along the surface would only be a reading of another place).
-    std::uniform_real_distribution<double> size(0.1, 5.0);
-    for (std::size_t k = 0; k < clean.size() / 100; ++k) {
-      const std::size_t i = order[k];
-      moved[i] = 1;
-      contaminated[i] += (rng() % 2 ? 1.0 : -1.0) * size(rng) * plan[i].normal;
-    }
+    const std::vector<char> moved = move_one_percent(contaminated, plan, seed);
     std::vector<Point3> without;
     for (std::size_t i = 0; i < clean.size(); ++i) {
       if (!moved[i]) without.push_back(clean[i]);
@@ -512,16 +519,7 @@ TEST(Pipeline, GrossOutliersAtLowAndHighNoise) {
                locator, plan, {.probe_radius = c.probe_radius, .noise_sigma = sigma, .seed = seed})) {
         points.push_back(t.measured);
       }
-      std::mt19937_64 rng(seed);
-      std::vector<std::size_t> order(points.size());
-      for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-      std::shuffle(order.begin(), order.end(), rng);
-      std::vector<char> moved(points.size(), 0);
-      std::uniform_real_distribution<double> size(0.1, 5.0);
-      for (std::size_t k = 0; k < points.size() / 100; ++k) {
-        moved[order[k]] = 1;
-        points[order[k]] += (rng() % 2 ? 1.0 : -1.0) * size(rng) * plan[order[k]].normal;
-      }
+      const std::vector<char> moved = move_one_percent(points, plan, seed);
       const AgainstTruth t = against_truth(compensation::compensate(c.nominal, points, std::nullopt, o), locator, moved);
       std::printf("sigma %.1f um seed %d: worst error %.2f um (%.2f u); %d good points flagged, %d moved missed\n",
                   sigma * 1e3, static_cast<int>(seed), t.worst * 1e3, t.worst_in_u, t.good_flagged, t.moved_missed);
