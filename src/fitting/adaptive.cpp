@@ -81,6 +81,15 @@ int span_of(const std::vector<double>& breaks, double t) {
   return std::clamp(s, 0, static_cast<int>(breaks.size()) - 2);
 }
 
+// Calls f(s2) for span (a, b) of an nsu × nsv grid of spans (u-major) and each of its (up to) eight neighbours:
+// the neighbourhood the span tests, the bias estimate and the local spread pool over.
+template <typename F>
+void for_each_around(std::size_t a, std::size_t b, std::size_t nsu, std::size_t nsv, F&& f) {
+  for (std::size_t a2 = a > 0 ? a - 1 : 0; a2 <= std::min(a + 1, nsu - 1); ++a2) {
+    for (std::size_t b2 = b > 0 ? b - 1 : 0; b2 <= std::min(b + 1, nsv - 1); ++b2) f(a2 * nsv + b2);
+  }
+}
+
 // Each span's spread (AdaptiveFitResult::span_spread): 1.4826 × the median |standardised residual| over the points
 // in it and the eight around it, never below `sigma`. Each span's neighbourhood is gathered and its median taken on
 // its own (in parallel, the same whatever the thread count).
@@ -104,15 +113,11 @@ std::vector<double> span_spread(std::span<const double> standardised, std::span<
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nsu * nsv, 64), [&](const auto& range) {
     std::vector<double> around;  // in double for median_in_place
     for (std::size_t s = range.begin(); s != range.end(); ++s) {
-      const std::size_t a = s / nsv, b = s % nsv;
       around.clear();
-      for (std::size_t a2 = a > 0 ? a - 1 : 0; a2 <= std::min(a + 1, nsu - 1); ++a2) {
-        for (std::size_t b2 = b > 0 ? b - 1 : 0; b2 <= std::min(b + 1, nsv - 1); ++b2) {
-          const std::size_t s2 = a2 * nsv + b2;
-          around.insert(around.end(), grouped.begin() + static_cast<std::ptrdiff_t>(start[s2]),
-                        grouped.begin() + static_cast<std::ptrdiff_t>(start[s2 + 1]));
-        }
-      }
+      for_each_around(s / nsv, s % nsv, nsu, nsv, [&](std::size_t s2) {
+        around.insert(around.end(), grouped.begin() + static_cast<std::ptrdiff_t>(start[s2]),
+                      grouped.begin() + static_cast<std::ptrdiff_t>(start[s2 + 1]));
+      });
       if (around.size() >= static_cast<std::size_t>(kMinLocalPoints)) {
         by_span[s] = std::max(kMadToSigma * median_in_place(around), sigma);
       }
@@ -288,15 +293,12 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     };
     auto pooled = [&](std::size_t a, std::size_t b) {
       Pooled n;
-      for (std::size_t a2 = a > 0 ? a - 1 : 0; a2 <= std::min(a + 1, nsu - 1); ++a2) {
-        for (std::size_t b2 = b > 0 ? b - 1 : 0; b2 <= std::min(b + 1, nsv - 1); ++b2) {
-          const std::size_t s2 = a2 * nsv + b2;
-          n.chi2 += chi2[s2];
-          n.sum_r += sum_r[s2];
-          n.sum_free += sum_free[s2];
-          n.count += count[s2];
-        }
-      }
+      for_each_around(a, b, nsu, nsv, [&](std::size_t s2) {
+        n.chi2 += chi2[s2];
+        n.sum_r += sum_r[s2];
+        n.sum_free += sum_free[s2];
+        n.count += count[s2];
+      });
       return n;
     };
     // The fit's local bias b_k = E[r_k], estimated over each span and its eight neighbours (pooled: tens of
