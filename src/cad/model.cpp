@@ -60,6 +60,7 @@
 #include <mutex>
 #include <optional>
 
+#include "probecomp/cad/iges_counts.hpp"
 #include "probecomp/occt/convert.hpp"
 #include "probecomp/occt/crash_guard.hpp"
 #include "probecomp/temporary_files.hpp"
@@ -131,6 +132,10 @@ void check_file_frame(const std::filesystem::path& path, Format format) {
     if (first.size() < 73 || (first[72] != 'S' && first[72] != 'G')) fail(path, "not an IGES file (no start section)");
     const std::string last = last_line();
     if (last.size() < 73 || last[72] != 'T') fail(path, "truncated IGES file (no terminate section at the end)");
+    // Counts beyond what the file holds would have OpenCASCADE allocate for them (cad/iges_counts.hpp).
+    in.clear();
+    in.seekg(0);
+    if (std::optional<std::string> r = iges_count_beyond_data(in)) fail(path, *r + ": the file is damaged");
   }
 }
 

@@ -224,6 +224,16 @@ TEST(CadModelFuzzFindings, IgesWithABrokenParameterIsRefused) {
   EXPECT_EQ(message.find('\n'), std::string::npos) << message;
 }
 
+TEST(CadModelFuzzFindings, IgesDeclaringMorePolesThanItHoldsIsRefusedBeforeOpenCascadeReadsIt) {
+  // The IGES specification's surface sample with one B-spline surface declaring 10 000 × 10 000 poles. OpenCASCADE
+  // sizes its arrays by the declared counts and records a failure for each parameter missing: CI's fuzzing run ran
+  // out of its 2 GB (fuzz_cad_iges, "out-of-memory"), and at 2 000 × 2 000 a plain reader took 0.9 GB and died of
+  // SIGSEGV. Refused from the file's own text first (cad/iges_counts.hpp).
+  const std::filesystem::path p = kFuzzDir / "cad_iges-occt-oom-declared-poles.igs";
+  EXPECT_EQ(error_of(p), p.string() + ": IGES entity 128 (directory line 3) declares 100000000 poles but its parameter "
+                                      "data hold 437 values: the file is damaged");
+}
+
 TEST(CadModelFuzzFindings, StepWhoseSurfaceFailsHalfwayIsRefused) {
   // wavy-cube with three lines garbled (an edge, a point's type, a control point's coordinate): its B-spline surface
   // cannot be made. OpenCASCADE's transfer throws
