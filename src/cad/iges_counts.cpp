@@ -92,6 +92,9 @@ class EntityParameters {
           if (!r) r = need("knots", at(1) + at(3) + at(2) + at(4) + 4);
         }
         break;
+      case 406:  // property: NP, then NP values
+        if (known({1})) r = need("property values", at(1));
+        break;
       default:
         break;
     }
@@ -159,7 +162,7 @@ std::optional<std::string> iges_count_beyond_data(std::istream& in) {
       const auto [p, ec] = std::from_chars(line.data() + b, line.data() + 72, de);
       if (ec != std::errc()) de = -1;
     }
-    if (de != entity_line) {
+    if (!entity || de != entity_line) {
       if (entity) {
         if (std::optional<std::string> r = entity->too_few()) return r;
       }

@@ -70,6 +70,7 @@ TEST(IgesCounts, ACountBeyondTheDataIsNamedWithItsEntityAndDirectoryLine) {
   EXPECT_TRUE(check(iges(kGlobal, {{1, "102,4,5,7;"}})));
   EXPECT_TRUE(check(iges(kGlobal, {{1, "112,3,2,3,50,0.,1.;"}})));
   EXPECT_TRUE(check(iges(kGlobal, {{1, "114,3,1,40,40,0.,1.;"}})));
+  EXPECT_TRUE(check(iges(kGlobal, {{1, "406,4,1.,2.;"}})));
   // A negative count is OpenCASCADE's to refuse (its arrays check their bounds): not ours.
   EXPECT_FALSE(check(iges(kGlobal, {{1, "126,-5,1,0,0,1,0,0.,1.;"}})));
 }
@@ -85,6 +86,15 @@ TEST(IgesCounts, StringsAndTheFilesOwnDelimitersAreRespected) {
   EXPECT_NE(r->find("declares 5003 knots"), std::string::npos) << *r;
   // Defaulted delimiters (the G section starts with its own delimiter).
   EXPECT_TRUE(check(iges(",,4HTEST;", {{1, "126,5000,1,0,0,1,0,0.;"}})));
+}
+
+TEST(IgesCounts, ParameterLinesWithoutADirectoryPointerAreReadAsOneEntity) {
+  // Was a read of an entity not yet made (UndefinedBehaviorSanitizer, fuzz_cad_iges): the first parameter line's
+  // pointer columns blank.
+  std::string text = iges(kGlobal, {{1, "126,5000,1,0,0,1,0,0.;"}});
+  const std::size_t p = text.find("126,");
+  text.replace(p + 65, 7, "       ");
+  EXPECT_TRUE(check(text));
 }
 
 TEST(IgesCounts, EveryIgesFileWeHavePasses) {

@@ -4,7 +4,7 @@
 // failure for each one missing. A damaged count (a B-spline surface of 10 000 × 10 000 poles in a 60 kB file) makes
 // it allocate gigabytes and record millions of messages. A count can never exceed the number of parameters the
 // entity holds, since each counted item takes at least one: that necessary condition is checked here for the
-// entities whose counts size arrays (IGES 5.3: 102, 106, 112, 114, 126, 128), so no valid file is refused.
+// entities whose counts size arrays (IGES 5.3: 102, 106, 112, 114, 126, 128 and the property entity 406), so no valid file is refused.
 
 #include <istream>
 #include <optional>
