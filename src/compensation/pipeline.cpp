@@ -674,6 +674,9 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
         c.contact = contacts[b].contact;
         c.normal = contacts[b].normal;
         c.uncertainty = std::hypot(ff.fit->noise_sigma * std::sqrt(ff.fit->variance_factor[i]), ff.fit->misfit[i]);
+        // An outlier's reading and the fit disagree by its residual, and which of them is right is not known (a
+        // gross error, or shape the fit cannot follow): its u covers both.
+        if (!ff.trusted[i]) c.uncertainty = std::hypot(c.uncertainty, ff.fit->residuals[i]);
       }
     }
   }
