@@ -147,7 +147,8 @@ std::optional<std::string> iges_count_beyond_data(std::istream& in) {
     if (line.size() < 73) continue;
     const char section = line[72];
     if (section == 'G') {
-      if (global.size() < 160) global += line.substr(0, 72);
+      // The delimiters are the first two fields, within the first few characters: two records are plenty.
+      if (global.size() < 144) global += line.substr(0, 72);
       continue;
     }
     if (section != 'P') continue;

@@ -4,7 +4,8 @@
 // failure for each one missing. A damaged count (a B-spline surface of 10 000 × 10 000 poles in a 60 kB file) makes
 // it allocate gigabytes and record millions of messages. A count can never exceed the number of parameters the
 // entity holds, since each counted item takes at least one: that necessary condition is checked here for the
-// entities whose counts size arrays (IGES 5.3: 102, 106, 112, 114, 126, 128 and the property entity 406), so no valid file is refused.
+// entities whose counts size arrays (IGES 5.3: 102, 106, 112, 114, 126, 128 and the property entity 406), so no
+// valid file is refused.
 
 #include <istream>
 #include <optional>
@@ -12,8 +13,9 @@
 
 namespace probecomp::cad {
 
-// The first entity whose declared counts its parameter data cannot hold, as a one-line reason ("entity 128
-// (directory line 3) declares 40 401 poles but holds 120 parameters"); nothing when every count fits.
+// The first entity whose declared counts its parameter data cannot hold, as a one-line reason ("IGES entity 128
+// (directory line 3) declares 100000000 poles but its parameter data hold 437 values"); nothing when every count
+// fits.
 [[nodiscard]] std::optional<std::string> iges_count_beyond_data(std::istream& in);
 
 }  // namespace probecomp::cad
