@@ -1,0 +1,170 @@
+#include "probecomp/compensation/normal_support.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "probecomp/geometry/point_tree.hpp"
+#include "probecomp/geometry/statistics.hpp"
+
+namespace probecomp::compensation {
+
+namespace {
+
+// Points sampled for the spacing's median: plenty for a median, and a fixed cost on a million points.
+constexpr std::size_t kSpacingSamples = 2000;
+// The quadric's six columns (in coordinates scaled to the neighbourhood's size) must have singular values at least
+// this fraction of the largest: below it the neighbours lie along one line (or one conic) and do not fix the
+// slope across it.
+constexpr double kMinSingularRatio = 1e-3;
+
+struct InFitTree {
+  geometry::PointCloud cloud;
+  geometry::PointTree tree;
+  std::vector<std::uint32_t> index;  // tree point → fitted point
+  explicit InFitTree(geometry::PointCloud c, std::vector<std::uint32_t> i)
+      : cloud(std::move(c)), tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16)), index(std::move(i)) {
+    tree.buildIndex();
+  }
+};
+
+// The normals (either sign) of the least-squares quadric and cubic height functions through `near`, over the plane
+// of their principal directions, where x projects on that plane (x is among them, or a point left out near them);
+// zero where they do not span a surface (the cubic needs ten points spread over it).
+std::array<Vector3, 2> local_normals(const Point3& x, std::span<const Point3> near) {
+  std::array<Vector3, 2> out{Vector3::Zero(), Vector3::Zero()};
+  Point3 mean = Point3::Zero();
+  for (const Point3& p : near) mean += p;
+  mean /= static_cast<double>(near.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  double size = 0.0;
+  for (const Point3& p : near) {
+    cov += (p - mean) * (p - mean).transpose();
+    size = std::max(size, (p - mean).norm());
+  }
+  if (!(size > 0.0)) return out;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> pca(cov);
+  const Vector3 e1 = pca.eigenvectors().col(2), e2 = pca.eigenvectors().col(1), e3 = pca.eigenvectors().col(0);
+  const auto rows = static_cast<Eigen::Index>(near.size());
+  Eigen::MatrixXd A(rows, 10);
+  Eigen::VectorXd z(rows);
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    const Vector3 d = (near[static_cast<std::size_t>(i)] - x) / size;
+    const double s = d.dot(e1), t = d.dot(e2);
+    A.row(i) << 1.0, s, t, s * s, s * t, t * t, s * s * s, s * s * t, s * t * t, t * t * t;
+    z[i] = d.dot(e3);
+  }
+  for (int degree = 2; degree <= 3; ++degree) {
+    const Eigen::Index columns = degree == 2 ? 6 : 10;
+    if (rows < columns) break;
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A.leftCols(columns), Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const Eigen::VectorXd& sv = svd.singularValues();
+    if (!(sv[columns - 1] > kMinSingularRatio * sv[0])) break;
+    const Eigen::VectorXd c = svd.solve(z);
+    // The slopes at x (s = t = 0); scaling both coordinates by `size` leaves them as they are.
+    out[static_cast<std::size_t>(degree - 2)] = (e3 - c[1] * e1 - c[2] * e2).normalized();
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<double> normal_disagreement(const nurbs::Surface& fit, std::span<const Point3> centres,
+                                        std::span<const fitting::SurfaceParameter> params,
+                                        std::span<const double> weights, const NormalCheck& check) {
+  const std::size_t n = centres.size();
+  std::vector<std::uint32_t> kept, left_out;
+  for (std::size_t k = 0; k < n; ++k) (weights.empty() || weights[k] > 0.0 ? kept : left_out).push_back(static_cast<std::uint32_t>(k));
+  if (left_out.empty()) return {};
+  std::vector<double> angle(n, 0.0);
+  const auto quiet_nan = std::numeric_limits<double>::quiet_NaN();
+  geometry::PointCloud cloud;
+  cloud.points.reserve(kept.size());
+  for (std::uint32_t k : kept) cloud.points.push_back(centres[k]);
+  if (kept.size() < 6) {
+    for (std::uint32_t k : kept) angle[k] = quiet_nan;
+    return angle;
+  }
+  const InFitTree in_fit(std::move(cloud), kept);
+  const std::vector<Point3>& pts = in_fit.cloud.points;
+
+  // The spacing: the median distance from a kept point to its nearest other kept point, over a fixed sample.
+  const std::size_t stride = std::max<std::size_t>(1, kept.size() / kSpacingSamples);
+  std::vector<double> nearest;
+  for (std::size_t i = 0; i < pts.size(); i += stride) {
+    std::uint32_t idx[2];
+    double dist_sq[2];  // squared distances (nanoflann's L2 adaptor)
+    nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(2);
+    knn.init(idx, dist_sq);
+    const double q[3] = {pts[i].x(), pts[i].y(), pts[i].z()};
+    in_fit.tree.findNeighbors(knn, q, nanoflann::SearchParams());
+    if (knn.size() == 2) nearest.push_back(std::sqrt(dist_sq[1]));
+  }
+  const double spacing = nearest.empty() ? 0.0 : geometry::median_in_place(nearest);
+  const double reach = check.reach_spacings * spacing;
+
+  // Kept points within reach of a left-out point (in tree order).
+  std::vector<char> near_gap(pts.size(), 0);
+  std::vector<std::pair<std::uint32_t, double>> found;
+  for (std::uint32_t k : left_out) {
+    const double q[3] = {centres[k].x(), centres[k].y(), centres[k].z()};
+    found.clear();
+    in_fit.tree.radiusSearch(q, reach * reach, found, nanoflann::SearchParams(32, 0.0, false));  // squared radius
+    for (const auto& f : found) near_gap[f.first] = 1;
+  }
+  // Those and the left-out points themselves (whose normal is the gap's), as fitted points.
+  std::vector<char> check_point(n, 0);
+  for (std::uint32_t i = 0; i < pts.size(); ++i) check_point[in_fit.index[i]] = near_gap[i];
+  for (std::uint32_t k : left_out) check_point[k] = 1;
+  std::vector<std::uint32_t> checked;
+  for (std::uint32_t k = 0; k < n; ++k) {
+    if (check_point[k]) checked.push_back(k);
+  }
+
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, checked.size(), 64), [&](const auto& range) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> dist_sq;  // squared distances (nanoflann's L2 adaptor)
+    std::vector<Point3> near;
+    for (std::size_t c = range.begin(); c != range.end(); ++c) {
+      const std::uint32_t k = checked[c];
+      const fitting::SurfaceParameter& at = params[k];
+      // Both normals where the fit puts the point: at a gross error's own centre, millimetres off, the
+      // neighbourhood's plane (tilted from the normal there by its curvature) would put the local models' slope
+      // elsewhere.
+      const Point3 x = nurbs::evaluate(fit, at.u, at.v);
+      const nurbs::UnitNormal nf = nurbs::unit_normal(fit, at.u, at.v);
+      double result = quiet_nan;
+      for (int count = check.neighbours; nf.status != nurbs::UnitNormal::Status::Degenerate &&
+                                         count <= check.max_neighbours;
+           count *= 2) {
+        const std::size_t wanted = std::min<std::size_t>(static_cast<std::size_t>(count), pts.size());
+        idx.resize(wanted);
+        dist_sq.resize(wanted);
+        nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(wanted);
+        knn.init(idx.data(), dist_sq.data());
+        const double q[3] = {x.x(), x.y(), x.z()};
+        in_fit.tree.findNeighbors(knn, q, nanoflann::SearchParams());
+        near.clear();
+        for (std::size_t j = 0; j < knn.size(); ++j) near.push_back(pts[idx[j]]);
+        const std::array<Vector3, 2> local = local_normals(x, near);
+        if (local[1].squaredNorm() > 0.0) {
+          result = 0.0;
+          for (const Vector3& nl : local) result = std::max(result, std::acos(std::min(std::abs(nl.dot(nf.n)), 1.0)));
+          break;
+        }
+        if (wanted == pts.size()) break;
+      }
+      angle[k] = result;
+    }
+  });
+  return angle;
+}
+
+}  // namespace probecomp::compensation

@@ -1,0 +1,104 @@
+// normal_disagreement against closed forms: the angle between a fit's normal and the data's, where the fit is the
+// exact surface (zero), tilted by a known angle (that angle), or where the data cannot tell (NaN).
+
+#include "probecomp/compensation/normal_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "probecomp/nurbs/constructors.hpp"
+
+namespace probecomp::compensation {
+namespace {
+
+// Points on an n × n grid over [0.1, 0.9]² of `s`'s parameters, with their parameters.
+struct Grid {
+  std::vector<Point3> points;
+  std::vector<fitting::SurfaceParameter> params;
+  Grid(const nurbs::Surface& s, int n) {
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        const double u = 0.1 + 0.8 * i / (n - 1), v = 0.1 + 0.8 * j / (n - 1);
+        points.push_back(nurbs::evaluate(s, u, v));
+        params.push_back({u, v});
+      }
+    }
+  }
+};
+
+TEST(NormalSupport, NothingLeftOutChecksNothing) {
+  const nurbs::Surface plane = nurbs::make_plane_patch({0, 0, 0}, {20, 0, 0}, {0, 20, 0});
+  const Grid g(plane, 30);
+  EXPECT_TRUE(normal_disagreement(plane, g.points, g.params, std::vector<double>(g.points.size(), 1.0)).empty());
+}
+
+TEST(NormalSupport, OnTheExactCylinderTheNormalsAgree) {
+  // Centres on a cylinder of radius 11.5 mm, 0.6 mm apart; 1 % left out and moved 0.1–5 mm off it (gross errors).
+  const nurbs::Surface cylinder = nurbs::make_cylinder_section({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 11.5, 0.0, 1.5, 20.0);
+  Grid g(cylinder, 40);
+  std::vector<double> weights(g.points.size(), 1.0);
+  int left_out = 0;
+  for (std::size_t k = 37; k < g.points.size(); k += 101, ++left_out) {
+    weights[k] = 0.0;
+    const Point3 p = g.points[k];
+    g.points[k] += (0.1 + 0.3 * left_out) * Vector3(p.x(), p.y(), 0.0).normalized();
+  }
+  const std::vector<double> angle = normal_disagreement(cylinder, g.points, g.params, weights);
+  ASSERT_EQ(angle.size(), g.points.size());
+  for (std::size_t k = 0; k < angle.size(); ++k) {
+    ASSERT_FALSE(std::isnan(angle[k])) << k;
+    // The local quadric and cubic miss the cylinder's fourth-order terms over a neighbourhood of ±1.5 mm: a
+    // thousandth of a radian makes r(1 − cos θ) half a nanometre for r = 1 mm.
+    EXPECT_LT(angle[k], 1e-3) << k;
+  }
+}
+
+TEST(NormalSupport, AFitTiltedByAKnownAngleDisagreesByThatAngleNearAGapAndNowhereElse) {
+  // Data on the plane z = 0, 0.5 mm apart; the "fit" is that plane turned 10° about the x axis through the grid's
+  // middle row (the same parameters give points on it near the data's).
+  const double alpha = 10.0 * std::numbers::pi / 180.0;
+  const nurbs::Surface plane = nurbs::make_plane_patch({0, 0, 0}, {25, 0, 0}, {0, 25, 0});
+  const nurbs::Surface tilted =
+      nurbs::make_plane_patch({0, 12.5 - 12.5 * std::cos(alpha), -12.5 * std::sin(alpha)}, {25, 0, 0},
+                              {0, 25 * std::cos(alpha), 25 * std::sin(alpha)});
+  const int n = 41;
+  const Grid g(plane, n);
+  std::vector<double> weights(g.points.size(), 1.0);
+  const std::size_t gap = 5 * n + 5;  // one point left out, near a corner
+  weights[gap] = 0.0;
+  const double spacing = 0.8 * 25.0 / (n - 1);
+  const std::vector<double> angle = normal_disagreement(tilted, g.points, g.params, weights);
+  ASSERT_EQ(angle.size(), g.points.size());
+  for (std::size_t k = 0; k < angle.size(); ++k) {
+    const double d = (g.points[k] - g.points[gap]).norm();
+    if (d <= 5.9 * spacing) {
+      EXPECT_NEAR(angle[k], alpha, 1e-9) << k;  // within reach (6 spacings) of the gap, the gap itself included
+    } else if (d >= 6.1 * spacing) {
+      EXPECT_EQ(angle[k], 0.0) << k;
+    }
+  }
+}
+
+TEST(NormalSupport, PointsAlongOneLineCannotTell) {
+  // One scan line: no neighbours span a surface, whatever their number.
+  const nurbs::Surface plane = nurbs::make_plane_patch({0, 0, 0}, {20, 0, 0}, {0, 20, 0});
+  std::vector<Point3> points;
+  std::vector<fitting::SurfaceParameter> params;
+  for (int i = 0; i < 200; ++i) {
+    const double u = 0.1 + 0.8 * i / 199.0;
+    points.push_back(nurbs::evaluate(plane, u, 0.5));
+    params.push_back({u, 0.5});
+  }
+  std::vector<double> weights(points.size(), 1.0);
+  weights[100] = 0.0;
+  const std::vector<double> angle = normal_disagreement(plane, points, params, weights);
+  ASSERT_EQ(angle.size(), points.size());
+  EXPECT_TRUE(std::isnan(angle[100]));
+  EXPECT_TRUE(std::isnan(angle[99]));
+  EXPECT_EQ(angle[0], 0.0);  // beyond reach: not checked
+}
+
+}  // namespace
+}  // namespace probecomp::compensation
