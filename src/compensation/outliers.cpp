@@ -24,19 +24,20 @@ double bound(double sigma, double factor, const OutlierTest& test) {
 double outlier_bound(const fitting::AdaptiveFitResult& fit, double weight, std::size_t k, const OutlierTest& test,
                      Spread spread) {
   // The local spread is never below the face's noise (AdaptiveFitResult::span_spread).
-  const double sigma = spread == Spread::Local ? fitting::local_spread(fit, k) : fit.noise_sigma;
+  const double sigma = spread == Spread::Local ? fitting::LocalSpread(fit)(k) : fit.noise_sigma;
   return bound(sigma, residual_factor(fit, weight, k), test);
 }
 
 std::vector<char> outliers_against_fit(const fitting::AdaptiveFitResult& fit, std::span<const double> weights,
                                        const OutlierTest& test, Spread spread) {
   std::vector<char> out(fit.residuals.size(), 0);
+  const fitting::LocalSpread local_spread(fit);
   for (std::size_t k = 0; k < out.size(); ++k) {
     const double r = std::abs(fit.residuals[k]);
     const double factor = residual_factor(fit, weights.empty() ? 1.0 : weights[k], k);
     // The local spread only ever raises the bound: looked up only for the few points beyond the face's.
     out[k] = r > bound(fit.noise_sigma, factor, test) &&
-             (spread == Spread::Face || r > bound(fitting::local_spread(fit, k), factor, test));
+             (spread == Spread::Face || r > bound(local_spread(k), factor, test));
   }
   return out;
 }

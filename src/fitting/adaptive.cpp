@@ -128,13 +128,14 @@ std::vector<double> span_spread(std::span<const double> standardised, std::span<
 
 }  // namespace
 
-double local_spread(const AdaptiveFitResult& fit, std::size_t k) {
-  const std::vector<double> bu = fit.surface.U().breakpoints();
-  const std::vector<double> bv = fit.surface.V().breakpoints();
-  const std::size_t nsv = bv.size() - 1;
-  const std::size_t s = static_cast<std::size_t>(span_of(bu, fit.params[k].u)) * nsv +
-                        static_cast<std::size_t>(span_of(bv, fit.params[k].v));
-  return s < fit.span_spread.size() ? fit.span_spread[s] : fit.noise_sigma;
+LocalSpread::LocalSpread(const AdaptiveFitResult& fit)
+    : fit_(fit), bu_(fit.surface.U().breakpoints()), bv_(fit.surface.V().breakpoints()) {}
+
+double LocalSpread::operator()(std::size_t k) const {
+  const std::size_t nsv = bv_.size() - 1;
+  const std::size_t s = static_cast<std::size_t>(span_of(bu_, fit_.params[k].u)) * nsv +
+                        static_cast<std::size_t>(span_of(bv_, fit_.params[k].v));
+  return s < fit_.span_spread.size() ? fit_.span_spread[s] : fit_.noise_sigma;
 }
 
 std::vector<std::uint32_t> nearest_neighbours(std::span<const Point3> points) {

@@ -10,7 +10,7 @@
 // exact data from collapsing the bound to the fit's own model error.
 //
 // σ̂ is the face's noise, or the spread of the residuals around the point where that is larger
-// (fitting::local_spread): where the fit cannot follow the shape (a feature the data support no more
+// (fitting::LocalSpread): where the fit cannot follow the shape (a feature the data support no more
 // control points for, at low noise), its residuals are the shape's, several points deep, and a point that does not
 // stand out from them is no gross error. But a fit with gross errors in it is pulled towards them over their
 // neighbourhoods, whose spread they inflate enough to hide a smaller error nearby: a face's first fit is judged
