@@ -1,6 +1,9 @@
 // End-to-end benchmarks (issue 6), on 2 cores:
 //   BM_Compensate10k             the paper's size: 10 000 simulated touches of the built-in free-form case
 //                                (deformed, misaligned, σ = 4.5 µm), CAD-based compensation. Target ≤ 0.2 s.
+//   BM_NormalCheck1M             compensation::normal_disagreement alone on 1 000 000 centres of a 20 × 20 rational
+//                                bicubic face (the fit: the exact surface), 1 % left out at random: the cost the
+//                                check adds to a face with gross errors (items: points checked).
 //   BM_Compensate1M20x20         1 000 000 raw centres on a 20 × 20 rational bicubic face (moved ~1 mm / 1°,
 //                                σ = 2 µm). Target ≤ 10 s and ≤ 2 GB peak memory (counter peak_rss_MB: the
 //                                process's peak resident set, which includes the input).
@@ -14,6 +17,7 @@
 #include <random>
 
 #include "probecomp/cad/locator.hpp"
+#include "probecomp/compensation/normal_support.hpp"
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/simulation/freeform_case.hpp"
 #include "support/test_surfaces.hpp"
@@ -88,9 +92,34 @@ void run(benchmark::State& state, const Input& in) {
 }
 
 void BM_Compensate10k(benchmark::State& state) { run(state, freeform_10k()); }
+
+void BM_NormalCheck1M(benchmark::State& state) {
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  const nurbs::Surface s = testing::freeform_panel(7, 20, true);
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> t(0.02, 0.98), chance(0.0, 1.0);
+  std::vector<Point3> centres;
+  std::vector<fitting::SurfaceParameter> params;
+  std::vector<double> weights;
+  for (int k = 0; k < 1'000'000; ++k) {
+    const double u = t(rng), v = t(rng);
+    centres.push_back(nurbs::evaluate(s, u, v));
+    params.push_back({u, v});
+    weights.push_back(chance(rng) < 0.01 ? 0.0 : 1.0);
+  }
+  std::size_t checked = 0;
+  for (auto _ : state) {
+    const std::vector<double> angle = compensation::normal_disagreement(s, centres, params, weights);
+    checked = 0;
+    for (const double a : angle) checked += a != 0.0;
+    benchmark::DoNotOptimize(angle.data());
+  }
+  state.counters["checked"] = static_cast<double>(checked);
+}
 void BM_Compensate1M20x20(benchmark::State& state) { run(state, panel_1m()); }
 
 }  // namespace
 
 BENCHMARK(BM_Compensate10k)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_NormalCheck1M)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_Compensate1M20x20)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);

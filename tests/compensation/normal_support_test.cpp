@@ -69,13 +69,14 @@ TEST(NormalSupport, AFitTiltedByAKnownAngleDisagreesByThatAngleNearAGapAndNowher
   const std::size_t gap = 5 * n + 5;  // one point left out, near a corner
   weights[gap] = 0.0;
   const double spacing = 0.8 * 25.0 / (n - 1);
+  const double reach = NormalCheck{}.reach_spacings * spacing;
   const std::vector<double> angle = normal_disagreement(tilted, g.points, g.params, weights);
   ASSERT_EQ(angle.size(), g.points.size());
   for (std::size_t k = 0; k < angle.size(); ++k) {
     const double d = (g.points[k] - g.points[gap]).norm();
-    if (d <= 5.9 * spacing) {
-      EXPECT_NEAR(angle[k], alpha, 1e-9) << k;  // within reach (6 spacings) of the gap, the gap itself included
-    } else if (d >= 6.1 * spacing) {
+    if (d <= reach - 0.1 * spacing) {
+      EXPECT_NEAR(angle[k], alpha, 1e-9) << k;  // within reach of the gap, the gap itself included
+    } else if (d >= reach + 0.1 * spacing) {
       EXPECT_EQ(angle[k], 0.0) << k;
     }
   }

@@ -25,8 +25,9 @@ namespace probecomp::compensation {
 struct NormalCheck {
   // In-fit points within this many point spacings (the median distance to the nearest other in-fit point) of a
   // left-out point are checked: a bicubic fit's control points reach about two knot spans, and refinement on exact
-  // data stops at spans of one to two spacings.
-  double reach_spacings = 6.0;
+  // data stops at spans of one to two spacings. Measured on the noise-free panel with 1 % gross errors (120 × 60,
+  // seeds 1–3), worst row in stated u: 1.28, 2.48, 1.03 at 3 spacings; 1.28, 1.39, 0.99 at 4 and at 6.
+  double reach_spacings = 4.0;
   // The quadric is fitted through this many nearest in-fit centres (the point's own included), more where they
   // do not span two directions (points along one scan line).
   int neighbours = 20;
