@@ -8,7 +8,9 @@
 //   RegistrationError  the points could not be registered to the model credibly
 //   FitError           a surface that could not be fitted or offset where the caller needs one
 
+#include <cstring>
 #include <stdexcept>
+#include <string>
 
 namespace probecomp {
 
@@ -36,5 +38,11 @@ class FitError : public Error {
  public:
   using Error::Error;
 };
+
+// The system's reason for a failed open(2) or write(2), errno as it left it, for the end of a message: " (No space
+// left on device)", or nothing when errno is 0 (a failure that set none).
+[[nodiscard]] inline std::string system_reason(int errno_value) {
+  return errno_value != 0 ? " (" + std::string(std::strerror(errno_value)) + ")" : std::string();
+}
 
 }  // namespace probecomp

@@ -55,7 +55,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
-#include <cstring>
 #include <fstream>
 #include <mutex>
 #include <optional>
@@ -520,7 +519,7 @@ void write_surfaces(const std::filesystem::path& path, const std::vector<nurbs::
   std::error_code ec;
   if (!ok) {
     std::filesystem::remove(tmp, ec);
-    fail(path, std::string("could not be written") + (reason != 0 ? std::string(" (") + std::strerror(reason) + ")" : ""));
+    fail(path, "could not be written" + system_reason(reason));
   }
   std::filesystem::rename(tmp, path, ec);
   if (ec) {

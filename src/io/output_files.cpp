@@ -1,7 +1,6 @@
 #include "probecomp/io/output_files.hpp"
 
 #include <cerrno>
-#include <cstring>
 #include <fstream>
 #include <stdexcept>
 #include <system_error>
@@ -69,8 +68,7 @@ void OutputFiles::add_streamed(const std::filesystem::path& destination, const s
     // errno is what the failing open(2) or write(2) left: the reason a user can act on (no space, read-only).
     const auto cannot = [&] {
       const int reason = errno;
-      return InputError(destination.string() + ": cannot be written" +
-                        (reason != 0 ? " (" + std::string(std::strerror(reason)) + ")" : std::string()));
+      return InputError(destination.string() + ": cannot be written" + system_reason(reason));
     };
     errno = 0;
     std::ofstream out(temporary, std::ios::binary);
