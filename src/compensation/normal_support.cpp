@@ -27,16 +27,6 @@ constexpr std::size_t kSpacingSamples = 2000;
 // line.
 constexpr double kMinPivotRatio = 1e-6;
 
-struct InFitTree {
-  geometry::PointCloud cloud;
-  geometry::PointTree tree;
-  std::vector<std::uint32_t> index;  // tree point → fitted point
-  explicit InFitTree(geometry::PointCloud c, std::vector<std::uint32_t> i)
-      : cloud(std::move(c)), tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16)), index(std::move(i)) {
-    tree.buildIndex();
-  }
-};
-
 // The normals (either sign) of the least-squares quadric and cubic height functions through `near`, over the plane
 // of their principal directions, where x projects on that plane (x is among them, or a point left out near them);
 // zero where they do not span a surface (the cubic needs ten points spread over it). By the normal equations, in
@@ -98,14 +88,15 @@ std::vector<double> normal_disagreement(const nurbs::Surface& fit, std::span<con
   if (left_out.empty()) return {};
   std::vector<double> angle(n, 0.0);
   const auto quiet_nan = std::numeric_limits<double>::quiet_NaN();
-  geometry::PointCloud cloud;
-  cloud.points.reserve(kept.size());
-  for (std::uint32_t k : kept) cloud.points.push_back(centres[k]);
   if (kept.size() < 6) {
     for (std::uint32_t k : kept) angle[k] = quiet_nan;
     return angle;
   }
-  const InFitTree in_fit(std::move(cloud), kept);
+  // The in-fit centres' tree; its point i is fitted point kept[i].
+  std::vector<Point3> kept_centres;
+  kept_centres.reserve(kept.size());
+  for (std::uint32_t k : kept) kept_centres.push_back(centres[k]);
+  const geometry::OwnedPointTree in_fit(std::move(kept_centres));
   const std::vector<Point3>& pts = in_fit.cloud.points;
 
   // The spacing: the median distance from a kept point to its nearest other kept point, over a fixed sample.
@@ -137,7 +128,7 @@ std::vector<double> normal_disagreement(const nurbs::Surface& fit, std::span<con
   // result is the point's own, whatever the order.
   std::vector<std::uint32_t> checked;
   for (const std::uint32_t i : in_fit.tree.vAcc) {
-    if (near_gap[i]) checked.push_back(in_fit.index[i]);
+    if (near_gap[i]) checked.push_back(kept[i]);
   }
   checked.insert(checked.end(), left_out.begin(), left_out.end());
 
@@ -151,8 +142,9 @@ std::vector<double> normal_disagreement(const nurbs::Surface& fit, std::span<con
       // Both normals where the fit puts the point: at a gross error's own centre, millimetres off, the
       // neighbourhood's plane (tilted from the normal there by its curvature) would put the local models' slope
       // elsewhere.
-      const Point3 x = nurbs::evaluate(fit, at.u, at.v);
-      const nurbs::UnitNormal nf = nurbs::unit_normal(fit, at.u, at.v);
+      const nurbs::SurfaceD1 d = nurbs::derivatives_d1(fit, at.u, at.v);
+      const Point3& x = d.S;
+      const nurbs::UnitNormal nf = nurbs::unit_normal(fit, at.u, at.v, d.Su, d.Sv);
       double result = quiet_nan;
       for (int count = check.neighbours; nf.status != nurbs::UnitNormal::Status::Degenerate &&
                                          count <= check.max_neighbours;

@@ -11,16 +11,6 @@ namespace probecomp::geometry {
 
 namespace {
 
-// A k-d tree over a copy of the points.
-struct Tree {
-  PointCloud cloud;
-  PointTree tree;
-  explicit Tree(std::span<const Point3> points)
-      : cloud{std::vector<Point3>(points.begin(), points.end())}, tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
-    tree.buildIndex();
-  }
-};
-
 // `tree` over `points`; null when there are fewer than 2. `within`, when given, is set for each point that has
 // another within `tolerance` (mm) among the neighbours found.
 std::vector<std::uint32_t> nearest_others_in(const PointTree* tree, std::span<const Point3> points, int count,
@@ -101,19 +91,19 @@ std::vector<std::uint32_t> first_at_same_position_in(const PointTree* tree, std:
 
 std::vector<std::uint32_t> nearest_others(std::span<const Point3> points, int count) {
   if (points.size() < 2 || count <= 0) return nearest_others_in(nullptr, points, count);
-  const Tree t(points);
+  const OwnedPointTree t(std::vector<Point3>(points.begin(), points.end()));
   return nearest_others_in(&t.tree, points, count);
 }
 
 std::vector<std::uint32_t> first_at_same_position(std::span<const Point3> points, double tolerance) {
   if (points.size() < 2) return first_at_same_position_in(nullptr, points, tolerance);
-  const Tree t(points);
+  const OwnedPointTree t(std::vector<Point3>(points.begin(), points.end()));
   return first_at_same_position_in(&t.tree, points, tolerance);
 }
 
 NearestAndFirst nearest_other_and_first(std::span<const Point3> points, double tolerance) {
   if (points.size() < 2) return {nearest_others_in(nullptr, points, 1), first_at_same_position_in(nullptr, points, tolerance)};
-  const Tree t(points);
+  const OwnedPointTree t(std::vector<Point3>(points.begin(), points.end()));
   // The nearest other tells which points may repeat another: only those are searched around (a million distinct
   // points: no radius search at all).
   std::vector<char> within;

@@ -399,10 +399,7 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
   if (coarse.status == Status::TooFewPoints || coarse.status == Status::NumericalError) {
     return iterate(model, machine_points, options, {}, offsets);
   }
-  geometry::PointCloud cloud;
-  cloud.points = subset;
-  geometry::PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  tree.buildIndex();
+  const geometry::OwnedPointTree near(std::move(subset));
   std::vector<cad::ModelPoint> hints(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -412,7 +409,7 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
       double dist_sq = 0.0;  // squared (nanoflann)
       nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(1);
       knn.init(&k, &dist_sq);
-      tree.findNeighbors(knn, q, nanoflann::SearchParams());
+      near.tree.findNeighbors(knn, q, nanoflann::SearchParams());
       const PointMatch& m = coarse.matches[k];
       hints[i].status = m.status;
       hints[i].face = m.face;

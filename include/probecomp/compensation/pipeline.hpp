@@ -58,9 +58,10 @@ struct CompensatedPoint {
   double deviation = 0.0;            // signed distance from the registered nominal, + outside the material, mm
   // Standard uncertainty (k = 1, mm) of the contact point along its normal: the fit's share σ̂·√(variance factor)
   // (its hat-matrix diagonal and noise estimate), its estimated bias (AdaptiveFitResult::misfit) and the
-  // registration's share (registration::normal_variance times its residual variance) in quadrature; for an Outlier,
-  // its residual from the fit too (the reading and the fit disagree by that much, and which is right is not known).
-  // Where no fit stands behind the point (few points, an edge) the fit's share is the registration's residual scale:
+  // registration's share (registration::normal_variance times its residual variance) in quadrature; for an Outlier
+  // or a point the last fit did not use, its residual from the fit too (the reading and the fit disagree by that
+  // much, and which is right is not known); next to points left out, r(1 − cos θ) for the fit's normal's
+  // disagreement θ with the centres around it (normal_support.hpp). Where no fit stands behind the point (few points, an edge) the fit's share is the registration's residual scale:
   // the raw centre's whole scatter about the model. NaN where nothing was computed.
   double uncertainty = std::numeric_limits<double>::quiet_NaN();
   int face = -1;                     // index of the CAD face (cad::Face::index)

@@ -3,6 +3,7 @@
 // SQUARED distances: every distance a PointTree returns or takes is squared.
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 // GCC 12 flags nanoflann's KNN insertion loop with -Warray-bounds for k = 1 although it checks capacity first.
 #pragma GCC diagnostic push
@@ -26,5 +27,15 @@ struct PointCloud {
 
 using PointTree =
     nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, PointCloud>, PointCloud, 3, std::uint32_t>;
+
+// A k-d tree over its own copy of the points (the tree refers to them: built in place, never moved).
+struct OwnedPointTree {
+  PointCloud cloud;
+  PointTree tree;
+  explicit OwnedPointTree(std::vector<Point3> points)
+      : cloud{std::move(points)}, tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
+    tree.buildIndex();
+  }
+};
 
 }  // namespace probecomp::geometry
