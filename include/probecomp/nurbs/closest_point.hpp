@@ -43,9 +43,10 @@ struct ClosestPointResult {
   double distance = std::numeric_limits<double>::infinity();  // |point − query|, mm
   int iterations = 0;                                          // Newton iterations over all starts
   int starts = 0;                                              // Newton starts (seed cells visited)
-  // The tangents S_u, S_v where Newton last evaluated them: at (u, v), or within its last step of under
-  // kClosestPointStepTolerance (the normal from them is then off by under 1e-8 mm times the curvature). Zero where
-  // unknown (a point found on a trim boundary): a caller that needs the normal evaluates it.
+  // The tangents S_u, S_v at (u, v): where Newton last evaluated them, or carried there to first order over its
+  // last step (under 1e-6 mm, taken without an evaluation; the normal from them is then off by the square of that
+  // times the curvature's). Zero where unknown (a point found on a trim boundary): a caller that needs the normal
+  // evaluates it.
   Vector3 Su = Vector3::Zero(), Sv = Vector3::Zero();
 
   [[nodiscard]] bool ok() const {
