@@ -144,7 +144,9 @@ void check_point_spread(std::span<const Point3> raw) {
 void per_member(fitting::AdaptiveFitResult& fit, std::span<const std::uint32_t> position) {
   auto expand = [&](auto& values) {
     std::remove_reference_t<decltype(values)> out(position.size());
-    for (std::size_t i = 0; i < position.size(); ++i) out[i] = values[position[i]];
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, position.size(), 1 << 14), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) out[i] = values[position[i]];
+    });
     values = std::move(out);
   };
   expand(fit.params);
@@ -735,13 +737,15 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
     }
     if (!fitted_noise.empty()) noise = geometry::median_in_place(fitted_noise);
   }
-  for (std::size_t k = 0; k < raw.size(); ++k) {
-    CompensatedPoint& c = out[k];
-    if (!c.computed()) continue;
-    const double reg = noise * noise * registration::normal_variance(registration.constraints, to_cad * c.contact,
-                                                                    to_cad.linear() * c.normal);
-    c.uncertainty = std::sqrt(c.uncertainty * c.uncertainty + std::max(reg, 0.0));
-  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, raw.size(), 4096), [&](const auto& range) {
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      CompensatedPoint& c = out[k];
+      if (!c.computed()) continue;
+      const double reg = noise * noise * registration::normal_variance(registration.constraints, to_cad * c.contact,
+                                                                      to_cad.linear() * c.normal);
+      c.uncertainty = std::sqrt(c.uncertainty * c.uncertainty + std::max(reg, 0.0));
+    }
+  });
   std::map<int, nurbs::ClosestPointSolver> solvers;  // built for the faces that need one
   for (std::size_t k = 0; k < raw.size(); ++k) {
     if (!retry[k]) continue;
