@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <random>
 #include <vector>
@@ -73,6 +75,60 @@ TEST(NearestOtherAndFirst, EqualsBothFunctionsApart) {
   std::size_t repeats = 0;
   for (std::size_t k = 0; k < n; ++k) repeats += both.first[k] != k;
   EXPECT_EQ(repeats, 352u);
+}
+
+// Over 131 072 points the search runs over several k-d trees (blocks cut at the median of the longest side, built in
+// parallel): checked against brute force for the points nearest the cuts (a slab about x = 0, the first cut of
+// points spread along x, and x = ±50, the next ones) and a random sample, with repeats across the cut, a non-finite
+// point, and more neighbours than one.
+TEST(NearestOthers, ACloudOfSeveralBlocksFindsWhatBruteForceFinds) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> x(-100.0, 100.0), y(-40.0, 40.0), z(-1.0, 1.0);
+  std::vector<Point3> p;
+  for (int k = 0; k < 300000; ++k) p.emplace_back(x(rng), y(rng), z(rng));
+  // Repeats of points next to the first cut, some of them on the other side of it.
+  std::vector<std::size_t> near_cut;
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    if (std::abs(p[k].x()) < 0.05 || std::abs(std::abs(p[k].x()) - 50.0) < 0.05) near_cut.push_back(k);
+  }
+  ASSERT_GT(near_cut.size(), 200u);
+  for (std::size_t i = 0; i < 100; ++i) p.push_back(p[near_cut[i]]);
+  p.push_back({nan, 0, 0});
+  const std::size_t n = p.size();
+  std::vector<std::size_t> check = near_cut;
+  std::uniform_int_distribution<std::size_t> any(0, n - 2);
+  for (int k = 0; k < 300; ++k) check.push_back(any(rng));
+  for (std::size_t i = 300000; i < n - 1; ++i) check.push_back(i);
+
+  constexpr int kCount = 3;
+  const std::vector<std::uint32_t> three = nearest_others(p, kCount);
+  const NearestAndFirst both = nearest_other_and_first(p, 1e-9);
+  EXPECT_EQ(both.nearest[n - 1], n - 1);  // the non-finite point lists itself
+  EXPECT_EQ(both.first[n - 1], n - 1);
+  for (const std::size_t k : check) {
+    // Brute force: the squared distances to every other finite point, the three smallest.
+    std::vector<std::pair<double, std::size_t>> d;
+    d.reserve(n);
+    for (std::size_t j = 0; j + 1 < n; ++j) {
+      if (j != k) d.emplace_back((p[j] - p[k]).squaredNorm(), j);
+    }
+    std::partial_sort(d.begin(), d.begin() + kCount, d.end());
+    for (int i = 0; i < kCount; ++i) {
+      // By distance: with repeats, which of two points at the same distance comes first is a tie.
+      EXPECT_EQ((p[three[k * kCount + static_cast<std::size_t>(i)]] - p[k]).squaredNorm(), d[static_cast<std::size_t>(i)].first)
+          << "point " << k << ", neighbour " << i;
+    }
+    EXPECT_EQ((p[both.nearest[k]] - p[k]).squaredNorm(), d[0].first) << "point " << k;
+    std::size_t first = k;
+    for (const auto& [dist_sq, j] : d) {
+      if (dist_sq <= 1e-18) first = std::min(first, j);
+    }
+    EXPECT_EQ(both.first[k], first) << "point " << k;
+  }
+  std::size_t repeats = 0;
+  for (std::size_t k = 0; k < n; ++k) repeats += both.first[k] != k;
+  EXPECT_EQ(repeats, 100u);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 #pragma once
-// Each point's nearest other points in space (k-d tree, geometry/point_tree.hpp), for tests that compare a point
+// Each point's nearest other points in space (k-d trees, geometry/point_tree.hpp), for tests that compare a point
 // with what is around it: the noise from neighbouring differences, a residual against its neighbours'.
 
 #include <cstdint>
@@ -20,7 +20,8 @@ namespace probecomp::geometry {
 [[nodiscard]] std::vector<std::uint32_t> first_at_same_position(std::span<const Point3> points, double tolerance);
 
 // Both of the above for one set, nearest_others(points, 1) and first_at_same_position(points, tolerance), from one
-// k-d tree (a million points: building one costs about 0.15 s on one core).
+// set of k-d trees (over 131 072 points, one per spatial block, built in parallel: nanoflann builds a tree on one
+// thread, a million points in about 0.27 s).
 struct NearestAndFirst {
   std::vector<std::uint32_t> nearest, first;
 };
