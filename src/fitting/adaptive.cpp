@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <cmath>
@@ -245,8 +246,10 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     // the face (a broad deformation): then the differences between neighbours, which that misfit barely
     // changes, tell the noise. On noise alone the two agree; the smaller is taken.
     {
-      const double spread = robust_noise_sigma(standardised, weights, 0);
-      const double local = neighbour_noise_sigma(standardised, weights, neighbours);
+      // Side by side: each is a serial median (a million points: about 25 ms each).
+      double spread = 0.0, local = 0.0;
+      tbb::parallel_invoke([&] { spread = robust_noise_sigma(standardised, weights, 0); },
+                           [&] { local = neighbour_noise_sigma(standardised, weights, neighbours); });
       // The fit makes neighbouring residuals alike, so their differences read about 10 % low on noise alone
       // (measured on a dented panel, 62 500 points, σ = 5 µm: 4.46 µm): the spread is taken unless it is clearly
       // above them, a misfit the fit has not yet followed.

@@ -138,6 +138,28 @@ double band_quadratic_form(const std::vector<double>& Z, int b, const int* idx, 
   return v;
 }
 
+// band_quadratic_form in two steps, for runs of points under one basis row: Z's entries there gathered once into a
+// dense block (block[a·m + c], c ≥ a), then each point's form from it, in the same order of operations (the same
+// bits) without the band's index arithmetic.
+void gather_block(const std::vector<double>& Z, int b, const int* idx, int m, double* block) {
+  for (int a = 0; a < m; ++a) {
+    for (int c = a; c < m; ++c) {
+      const int I = std::min(idx[a], idx[c]), J = std::max(idx[a], idx[c]);
+      block[a * m + c] = Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
+    }
+  }
+}
+
+double block_quadratic_form(const double* block, const double* r, int m) {
+  double v = 0.0;
+  for (int a = 0; a < m; ++a) {
+    double row = 0.0;
+    for (int c = a + 1; c < m; ++c) row += r[c] * block[a * m + c];
+    v += r[a] * (2.0 * row + r[a] * block[a * m + a]);
+  }
+  return v;
+}
+
 bool inside(const nurbs::Domain& d, const SurfaceParameter& t) {
   return t.u >= d.u0 && t.u <= d.u1 && t.v >= d.v0 && t.v <= d.v1;
 }
@@ -185,25 +207,53 @@ DataTerms assemble_data(const Surface& s, const Ordering& order, int b, std::spa
   const std::size_t max_chunks = std::max<std::size_t>(1, kChunkMemoryBytes / std::max<std::size_t>(bytes, 1));
   const std::size_t chunks = std::clamp<std::size_t>((n_points + kChunkPoints - 1) / kChunkPoints, 1, max_chunks);
   std::vector<DataTerms> parts(chunks);
+  // Consecutive points in one knot span (a scan line crosses a span in tens of points) share their unknowns:
+  // their outer products are summed in a small dense block, which is added into the band once per run of them,
+  // instead of each point's products scattered into the band (a million points: about twice as fast).
+  constexpr int kMaxRow = (nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
     DataTerms& t = parts[c];
     t.AtWA = Band(n, b);
     t.AtWy.assign(static_cast<std::size_t>(n) * 3, 0.0);
     RationalBasis rb;
-    int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
+    int idx[kMaxRow];
     const int m = (p + 1) * (q + 1);
+    double block[kMaxRow * kMaxRow];  // block[x·m + y], y ≤ x: Σ w R_x R_y over the run
+    double block_y[kMaxRow * 3];      // Σ w R_x y
+    int run_idx[kMaxRow];
+    int run_i0 = -1, run_j0 = -1;
+    auto flush = [&] {
+      if (run_i0 < 0) return;
+      for (int x = 0; x < m; ++x) {
+        for (int y = 0; y <= x; ++y) {
+          const int I = std::max(run_idx[x], run_idx[y]), J = std::min(run_idx[x], run_idx[y]);
+          t.AtWA.at(I, J) += block[x * m + y];
+        }
+        for (int c3 = 0; c3 < 3; ++c3) t.AtWy[3 * static_cast<std::size_t>(run_idx[x]) + c3] += block_y[x * 3 + c3];
+      }
+    };
     for (std::size_t k = n_points * c / chunks; k < n_points * (c + 1) / chunks; ++k) {
       const double w = weights.empty() ? 1.0 : weights[k];
       if (w == 0.0) continue;
       const Vector3 y = points[k] - basis_row(s, order, params[k], rb, idx);
-      t.AtWA.add_outer(idx, rb.R, m, w);
-      for (int a = 0; a < m; ++a) {
-        for (int c3 = 0; c3 < 3; ++c3) t.AtWy[3 * static_cast<std::size_t>(idx[a]) + c3] += w * rb.R[a] * y[c3];
+      if (rb.i0 != run_i0 || rb.j0 != run_j0) {
+        flush();
+        run_i0 = rb.i0;
+        run_j0 = rb.j0;
+        std::copy(idx, idx + m, run_idx);
+        std::fill(block, block + m * m, 0.0);
+        std::fill(block_y, block_y + m * 3, 0.0);
+      }
+      for (int x = 0; x < m; ++x) {
+        const double wx = w * rb.R[x];
+        for (int yy = 0; yy <= x; ++yy) block[x * m + yy] += wx * rb.R[yy];
+        for (int c3 = 0; c3 < 3; ++c3) block_y[x * 3 + c3] += wx * y[c3];
       }
       t.yWy += w * y.squaredNorm();
       t.weight_sum += w;
       ++t.used;
     }
+    flush();
   });
   DataTerms& out = parts[0];
   for (std::size_t c = 1; c < chunks; ++c) {
@@ -550,12 +600,21 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     result.variance_factor.assign(n_points, 0.0);
     result.smoothing_bias.assign(n_points, Vector3::Zero());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_points, 1024), [&](const auto& range) {
+      constexpr int kMaxRow = (nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1);
       RationalBasis rb;
-      int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
-      const int m = (start.p() + 1) * (start.q() + 1);
+      int idx[kMaxRow];
+      double block[kMaxRow * kMaxRow];
+      int run_i0 = -1, run_j0 = -1;  // the basis row whose block is gathered
+      const int q1 = start.q() + 1, m = (start.p() + 1) * q1;
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
-        (void)basis_row(start, order, params[k], rb, idx);
-        result.variance_factor[k] = band_quadratic_form(Z, b, idx, rb.R, m);
+        detail::rational_basis(start, params[k].u, params[k].v, rb);
+        if (rb.i0 != run_i0 || rb.j0 != run_j0) {
+          run_i0 = rb.i0;
+          run_j0 = rb.j0;
+          for (int a = 0; a < m; ++a) idx[a] = order.index(rb.i0 + a / q1, rb.j0 + a % q1);
+          gather_block(Z, b, idx, m, block);
+        }
+        result.variance_factor[k] = block_quadratic_form(block, rb.R, m);
         Vector3 e = Vector3::Zero();
         for (int a = 0; a < m; ++a) {
           const std::size_t I = static_cast<std::size_t>(idx[a]);
