@@ -205,10 +205,22 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
 
   // Robust weights and scale from the residuals r of the points in use.
   auto reweigh = [&]() {
-    used_r.clear();
-    for (std::size_t i = 0; i < n; ++i) {
-      if (use[i]) used_r.push_back(r[i]);
-    }
+    // The used residuals gathered in parallel: each chunk's count, then its copies at its offset.
+    constexpr std::size_t kChunks = 64;
+    std::array<std::size_t, kChunks + 1> offset{};
+    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
+      std::size_t count = 0;
+      for (std::size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i) count += use[i] != 0;
+      offset[c + 1] = count;
+    });
+    for (std::size_t c = 0; c < kChunks; ++c) offset[c + 1] += offset[c];
+    used_r.resize(offset[kChunks]);
+    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
+      std::size_t at = offset[c];
+      for (std::size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i) {
+        if (use[i]) used_r[at++] = r[i];
+      }
+    });
     scale = geometry::robust_scale_in_place(used_r, options.robust.min_scale);  // used_r is rebuilt at every call
     for_blocks(n, [&](std::size_t first, std::size_t last) {
       for (std::size_t i = first; i < last; ++i) w[i] = use[i] ? robust_weight(options.robust.loss, r[i], scale) : 0.0;
