@@ -25,7 +25,7 @@ Surface::Surface(KnotVector U, KnotVector V, std::vector<HomogeneousPoint> Pw)
   validate();
 }
 
-void Surface::validate() const {
+void Surface::validate() {
   const auto expected = static_cast<std::size_t>(num_u()) * static_cast<std::size_t>(num_v());
   if (Pw_.size() != expected) {
     throw InvalidGeometry("surface has " + std::to_string(Pw_.size()) + " control points but its knot vectors need " +
@@ -36,6 +36,7 @@ void Surface::validate() const {
       throw InvalidGeometry("control point " + std::to_string(k) + " has a non-positive or non-finite weight");
     }
   }
+  rational_ = std::any_of(Pw_.begin(), Pw_.end(), [&](const HomogeneousPoint& q) { return q.w() != Pw_[0].w(); });
 }
 
 Point3 Surface::control_point(int i, int j) const {
@@ -43,9 +44,7 @@ Point3 Surface::control_point(int i, int j) const {
   return q.head<3>() / q.w();
 }
 
-bool Surface::is_rational() const {
-  return std::any_of(Pw_.begin(), Pw_.end(), [&](const HomogeneousPoint& q) { return q.w() != Pw_[0].w(); });
-}
+
 
 namespace {
 
@@ -134,7 +133,12 @@ SurfaceD1 derivatives_d1(const Surface& s, double u, double v) {
 SurfaceD2 derivatives_d2(const Surface& s, double u, double v, KnotSpans spans) {
   HomogeneousPoint A[3][3];
   homogeneous_derivatives<2>(s, u, v, A, spans);
-  return rational_derivatives(A, 2);
+  if (s.is_rational()) return rational_derivatives(A, 2);
+  // Equal weights w: S = A/w and its derivatives alike, exactly (A4.4's weight derivatives vanish; computed they
+  // would be rounding of Σ N' = 0). The Newton of every closest point evaluates this.
+  const double w = s.homogeneous()[0].w();
+  return {A[0][0].head<3>() / w, A[1][0].head<3>() / w, A[0][1].head<3>() / w,
+          A[2][0].head<3>() / w, A[1][1].head<3>() / w, A[0][2].head<3>() / w};
 }
 
 GridRows::GridRows(const Surface& s, std::vector<double> tv, int order)

@@ -32,15 +32,17 @@ class Surface {
   [[nodiscard]] const std::vector<HomogeneousPoint>& homogeneous() const { return Pw_; }
   [[nodiscard]] Point3 control_point(int i, int j) const;
   [[nodiscard]] double weight(int i, int j) const { return homogeneous(i, j).w(); }
-  [[nodiscard]] bool is_rational() const;
+  // Not all weights equal (equal weights make a polynomial surface).
+  [[nodiscard]] bool is_rational() const { return rational_; }
   [[nodiscard]] Domain domain() const { return {U_.front(), U_.back(), V_.front(), V_.back()}; }
 
  private:
-  void validate() const;
+  void validate();
 
   KnotVector U_;
   KnotVector V_;
   std::vector<HomogeneousPoint> Pw_;
+  bool rational_ = false;  // set once by validate(): the net never changes after construction
 };
 
 struct SurfaceD1 {
