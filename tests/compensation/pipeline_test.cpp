@@ -433,6 +433,53 @@ std::vector<char> move_one_percent(std::vector<Point3>& points, const std::vecto
   return moved;
 }
 
+// A few gross errors (3 of 7 200 points moved 5 mm, under pipeline.cpp's kMaxSkippedShare) pull on the
+// registration by less than ICP's own tolerance (to first order, H⁺ Σ w r J: 0.015 and 0.007 µm against 0.042): the
+// registration is not made again for them (as many closest-point searches as without them; one more when it is),
+// and the other points' results still stay within the issue's 0.5 µm of the run without them (measured 0.018 and
+// 0.017 µm). Moved 0.1–5 mm instead, the same three pull by 0.045 and 0.18 µm, and the registration is made again.
+// Two seeds, 120 × 60 points.
+TEST(Pipeline, AFewGrossOutliersAreLeftOutWithoutRegisteringAgain) {
+  const PaperPanel panel(120, 60);
+  const compensation::CompensateOptions& o = panel.options;
+  const simulation::FreeformCase& c = panel.c;
+  for (const std::uint64_t seed : {1u, 2u}) {
+    SCOPED_TRACE(seed);
+    const std::vector<Point3> clean = panel.centres(c.noise_sigma, seed);
+    ASSERT_FALSE(HasFailure());
+    std::vector<Point3> contaminated = clean;
+    std::mt19937_64 rng(seed);
+    std::vector<char> moved(clean.size(), 0);
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t i = rng() % clean.size();
+      moved[i] = 1;
+      contaminated[i] += (rng() % 2 ? 1.0 : -1.0) * 5.0 * panel.plan[i].normal;
+    }
+    std::vector<Point3> without;
+    for (std::size_t i = 0; i < clean.size(); ++i) {
+      if (!moved[i]) without.push_back(clean[i]);
+    }
+    const auto with_errors = compensation::compensate(c.nominal, contaminated, std::nullopt, o);
+    const auto alone = compensation::compensate(c.nominal, without, std::nullopt, o);
+    double largest = 0.0;
+    for (std::size_t i = 0, j = 0; i < clean.size(); ++i) {
+      if (moved[i]) {
+        EXPECT_EQ(with_errors.points[i].status, compensation::PointStatus::Outlier) << i;
+        continue;
+      }
+      const compensation::CompensatedPoint& p = with_errors.points[i];
+      ASSERT_EQ(p.status, alone.points[j].status) << i;
+      largest = std::max({largest, (p.contact - alone.points[j].contact).norm(), std::abs(p.deviation - alone.points[j].deviation)});
+      ++j;
+    }
+    std::cout << "seed " << seed << ": others moved " << largest * 1e3 << " um from the run without the 3 outliers; "
+              << with_errors.registration.searches << " closest-point searches (without them: "
+              << alone.registration.searches << ")\n";
+    EXPECT_LE(largest, 0.0005);
+    EXPECT_LE(with_errors.registration.searches, alone.registration.searches);
+  }
+}
+
 // Issue 25: 1 % of the points moved 0.1–5 mm (gross errors: a dirty tip, a vibration) are all flagged, and move no
 // other point's result (contact point and deviation) by more than 0.5 µm from what it is without them (measured:
 // 0.053, 0.033, 0.021 µm; the deviations moved up to 0.52 µm before the registration was made again without the
