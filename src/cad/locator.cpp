@@ -80,10 +80,7 @@ CurvePoint refine_on_curve(const nurbs::Surface& s, const nurbs::Curve& c, const
   return cur;
 }
 
-double box_distance(const BoundingBox& b, const Point3& q) {
-  const Eigen::Array3d gap = (b.min - q).array().max((q - b.max).array()).max(0.0);
-  return std::sqrt(gap.square().sum());
-}
+double box_distance(const BoundingBox& b, const Point3& q) { return std::sqrt(b.squared_distance(q)); }
 
 }  // namespace
 

@@ -175,17 +175,20 @@ constexpr std::array<double, 5> kGaussWeights = {0.2369268850561891, 0.478628670
 constexpr std::size_t kChunkPoints = 16384;
 constexpr std::size_t kChunkMemoryBytes = std::size_t{64} << 20;
 
+// The unknown each of rb's basis functions multiplies, in idx.
+void row_unknowns(const Surface& s, const Ordering& order, const RationalBasis& rb, int* idx) {
+  const int q = s.q(), m = (s.p() + 1) * (q + 1);
+  for (int a = 0; a < m; ++a) idx[a] = order.index(rb.i0 + a / (q + 1), rb.j0 + a % (q + 1));
+}
+
 // The start surface's basis at t: its rational basis functions in rb, the unknown each one multiplies in idx, and
 // the start surface's point S⁰(t) (the basis row every use of a point needs).
 Vector3 basis_row(const Surface& s, const Ordering& order, const SurfaceParameter& t, RationalBasis& rb, int* idx) {
   detail::rational_basis(s, t.u, t.v, rb);
+  row_unknowns(s, order, rb, idx);
   const int q = s.q(), m = (s.p() + 1) * (q + 1);
   Vector3 S0 = Vector3::Zero();
-  for (int a = 0; a < m; ++a) {
-    const int i = rb.i0 + a / (q + 1), j = rb.j0 + a % (q + 1);
-    idx[a] = order.index(i, j);
-    S0 += rb.R[a] * s.control_point(i, j);
-  }
+  for (int a = 0; a < m; ++a) S0 += rb.R[a] * s.control_point(rb.i0 + a / (q + 1), rb.j0 + a % (q + 1));
   return S0;
 }
 
@@ -605,13 +608,13 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
       int idx[kMaxRow];
       double block[kMaxRow * kMaxRow];
       int run_i0 = -1, run_j0 = -1;  // the basis row whose block is gathered
-      const int q1 = start.q() + 1, m = (start.p() + 1) * q1;
+      const int m = (start.p() + 1) * (start.q() + 1);
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
         detail::rational_basis(start, params[k].u, params[k].v, rb);
         if (rb.i0 != run_i0 || rb.j0 != run_j0) {
           run_i0 = rb.i0;
           run_j0 = rb.j0;
-          for (int a = 0; a < m; ++a) idx[a] = order.index(rb.i0 + a / q1, rb.j0 + a % q1);
+          row_unknowns(start, order, rb, idx);
           gather_block(Z, b, idx, m, block);
         }
         result.variance_factor[k] = block_quadratic_form(block, rb.R, m);

@@ -102,7 +102,7 @@ class Forest {
     more_dist.resize(wanted);
     for (std::size_t bl = 0; bl < blocks_.size(); ++bl) {
       if (bl == own || !blocks_[bl].tree) continue;
-      if (found == wanted && !(box_distance_sq(blocks_[bl].box, points_[k]) < dist_sq[found - 1])) continue;
+      if (found == wanted && !(blocks_[bl].box.squared_distance(points_[k]) < dist_sq[found - 1])) continue;
       const std::size_t more = search(blocks_[bl], q, wanted, more_index.data(), more_dist.data());
       for (std::size_t i = 0; i < more; ++i) {
         // Insertion into the sorted list, keeping at most `wanted`.
@@ -127,7 +127,7 @@ class Forest {
     const double q[3] = {points_[k].x(), points_[k].y(), points_[k].z()};
     thread_local std::vector<std::pair<std::uint32_t, double>> hits;
     for (const Block& block : blocks_) {
-      if (!block.tree || box_distance_sq(block.box, points_[k]) > radius_sq) continue;
+      if (!block.tree || block.box.squared_distance(points_[k]) > radius_sq) continue;
       hits.clear();
       block.tree->tree.radiusSearch(q, radius_sq, hits, nanoflann::SearchParams(32, 0.0, false));
       for (const auto& [local, d_sq] : hits) found.push_back(block.index[local]);
@@ -144,10 +144,6 @@ class Forest {
     std::vector<std::uint32_t> index;  // the tree's points as indices into the points
     BoundingBox box;
   };
-
-  static double box_distance_sq(const BoundingBox& box, const Point3& p) {
-    return (box.min - p).cwiseMax(p - box.max).cwiseMax(0.0).squaredNorm();
-  }
 
   // nanoflann's k nearest in one block, mapped to indices into the points.
   static std::size_t search(const Block& block, const double* q, std::size_t wanted, std::uint32_t* index,

@@ -44,8 +44,6 @@ Point3 Surface::control_point(int i, int j) const {
   return q.head<3>() / q.w();
 }
 
-
-
 namespace {
 
 // Derivatives A[k][l] = ∂^{k+l} Sw / ∂u^k ∂v^l of the homogeneous surface for k + l <= D (A3.6).
@@ -93,8 +91,26 @@ void homogeneous_derivatives(const Surface& s, double u, double v, HomogeneousPo
 //   S^{kl} = (A^{kl} - Σ_{j=1..l} C(l,j) w^{0j} S^{k,l-j} - Σ_{i=1..k} C(k,i) w^{i0} S^{k-i,l}
 //             - Σ_{i=1..k} Σ_{j=1..l} C(k,i) C(l,j) w^{ij} S^{k-i,l-j}) / w.
 // The mixed term needs all three sums (tinynurbs drops one); tests check it by central differences. Orders above
-// `order` are left zero.
-SurfaceD2 rational_derivatives(const HomogeneousPoint (&A)[3][3], int order) {
+// `order` are left zero. With equal weights (s not rational) the weight's derivatives vanish and S^{kl} = A^{kl}/w.
+SurfaceD2 rational_derivatives(const Surface& s, const HomogeneousPoint (&A)[3][3], int order) {
+  if (!s.is_rational()) {
+    // Equal weights w: S = A/w and its derivatives alike, exactly (A4.4's weight derivatives vanish; computed they
+    // would be rounding of Σ N' = 0). The Newton of every closest point evaluates this.
+    const double w = s.homogeneous()[0].w();
+    SurfaceD2 r;
+    r.S = A[0][0].head<3>() / w;
+    r.Su = r.Sv = r.Suu = r.Suv = r.Svv = Vector3::Zero();
+    if (order >= 1) {
+      r.Su = A[1][0].head<3>() / w;
+      r.Sv = A[0][1].head<3>() / w;
+    }
+    if (order >= 2) {
+      r.Suu = A[2][0].head<3>() / w;
+      r.Suv = A[1][1].head<3>() / w;
+      r.Svv = A[0][2].head<3>() / w;
+    }
+    return r;
+  }
   const double w = A[0][0].w();
   SurfaceD2 r;
   r.S = A[0][0].head<3>() / w;
@@ -133,12 +149,7 @@ SurfaceD1 derivatives_d1(const Surface& s, double u, double v) {
 SurfaceD2 derivatives_d2(const Surface& s, double u, double v, KnotSpans spans) {
   HomogeneousPoint A[3][3];
   homogeneous_derivatives<2>(s, u, v, A, spans);
-  if (s.is_rational()) return rational_derivatives(A, 2);
-  // Equal weights w: S = A/w and its derivatives alike, exactly (A4.4's weight derivatives vanish; computed they
-  // would be rounding of Σ N' = 0). The Newton of every closest point evaluates this.
-  const double w = s.homogeneous()[0].w();
-  return {A[0][0].head<3>() / w, A[1][0].head<3>() / w, A[0][1].head<3>() / w,
-          A[2][0].head<3>() / w, A[1][1].head<3>() / w, A[0][2].head<3>() / w};
+  return rational_derivatives(s, A, 2);
 }
 
 GridRows::GridRows(const Surface& s, std::vector<double> tv, int order)
@@ -185,7 +196,7 @@ void GridRows::row(double u_in, std::span<SurfaceD2> out) const {
         for (int l = 0; k + l <= k_max; ++l) A[k][l] += N[l * (q + 1) + j] * T[static_cast<std::size_t>(k * nv) + col];
       }
     }
-    out[b] = rational_derivatives(A, k_max);
+    out[b] = rational_derivatives(s, A, k_max);
   }
 }
 

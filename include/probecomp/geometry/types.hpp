@@ -24,6 +24,10 @@ struct BoundingBox {
     return (p.array() >= min.array() - tolerance).all() && (p.array() <= max.array() + tolerance).all();
   }
   [[nodiscard]] double diagonal() const { return (max - min).norm(); }
+  // The squared distance from p to the box (0 inside): a lower bound on the distance to anything in it, squared.
+  [[nodiscard]] double squared_distance(const Point3& p) const {
+    return (min - p).cwiseMax(p - max).cwiseMax(0.0).squaredNorm();
+  }
 };
 
 }  // namespace probecomp
