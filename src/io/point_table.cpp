@@ -340,9 +340,18 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
   std::size_t done = 0;
   bool first_block = true;
   while (in) {
-    block.resize(carry.size() + kBlockBytes);
+    // No larger than what is left of the file (and one byte more, to meet its end in this read): resizing zeroes the
+    // block, and 16 MiB of zeroes cost a 10 000-point file more than reading it (10 ms against 2 ms).
+    std::size_t want = kBlockBytes;
+    if (!size_error) {
+      const std::streamoff at = in.tellg();
+      if (at >= 0 && static_cast<std::uintmax_t>(at) <= bytes) {
+        want = static_cast<std::size_t>(std::min<std::uintmax_t>(kBlockBytes, bytes - static_cast<std::uintmax_t>(at) + 1));
+      }
+    }
+    block.resize(carry.size() + want);
     std::copy(carry.begin(), carry.end(), block.begin());
-    in.read(block.data() + carry.size(), static_cast<std::streamsize>(kBlockBytes));
+    in.read(block.data() + carry.size(), static_cast<std::streamsize>(want));
     block.resize(carry.size() + static_cast<std::size_t>(in.gcount()));
     carry.clear();
     if (in) {
