@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <numeric>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -122,42 +123,42 @@ std::vector<double> band_inverse(const Band& L) {
   return z;
 }
 
-// rᵀ·Z·r over the unknowns idx[0..m) (all within the band of each other), Z in band_inverse's layout: a basis
-// row's variance factor.
-double band_quadratic_form(const std::vector<double>& Z, int b, const int* idx, const double* r, int m) {
-  // Z is symmetric: the diagonal terms once, each off-diagonal pair twice.
-  double v = 0.0;
-  for (int a = 0; a < m; ++a) {
-    double row = 0.0;
-    for (int c = a + 1; c < m; ++c) {
-      const int I = std::min(idx[a], idx[c]), J = std::max(idx[a], idx[c]);
-      row += r[c] * Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
-    }
-    v += r[a] * (2.0 * row + r[a] * Z[static_cast<std::size_t>(idx[a]) * (b + 1)]);
-  }
-  return v;
-}
-
-// band_quadratic_form in two steps, for runs of points under one basis row: Z's entries there gathered once into a
-// dense block (block[a·m + c], c ≥ a), then each point's form from it, in the same order of operations (the same
-// bits) without the band's index arithmetic.
+// rᵀ·Z·r over the unknowns idx[0..m) (all within the band of each other), Z in band_inverse's layout, in two steps
+// for runs of points under one basis row: Z's entries there gathered once into a dense symmetric block
+// (block[a·m + c], both triangles), then each point's form from it: a basis row's variance factor, or its leverage.
 void gather_block(const std::vector<double>& Z, int b, const int* idx, int m, double* block) {
   for (int a = 0; a < m; ++a) {
     for (int c = a; c < m; ++c) {
       const int I = std::min(idx[a], idx[c]), J = std::max(idx[a], idx[c]);
-      block[a * m + c] = Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
+      block[a * m + c] = block[c * m + a] = Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
     }
   }
 }
 
+// As a full matrix–vector product: twice the products of the triangle's, but in vector registers, where the
+// triangle's are a chain of dependent additions (the 10 000-point case's cross-validation, 17 trials: 22.8 ms
+// then, 8.5 ms this way, with its rows ordered by span).
+template <int M>
+double fixed_quadratic_form(const double* block, const double* r) {
+  const Eigen::Map<const Eigen::Matrix<double, M, M>> B(block);
+  const Eigen::Map<const Eigen::Matrix<double, M, 1>> x(r);
+  const Eigen::Matrix<double, M, 1> y = B * x;
+  return x.dot(y);
+}
+
 double block_quadratic_form(const double* block, const double* r, int m) {
-  double v = 0.0;
-  for (int a = 0; a < m; ++a) {
-    double row = 0.0;
-    for (int c = a + 1; c < m; ++c) row += r[c] * block[a * m + c];
-    v += r[a] * (2.0 * row + r[a] * block[a * m + a]);
+  switch (m) {
+    case 16: return fixed_quadratic_form<16>(block, r);  // bicubic: every fit of the pipeline
+    case 9: return fixed_quadratic_form<9>(block, r);
+    default: {
+      const Eigen::Map<const Eigen::MatrixXd> B(block, m, m);
+      const Eigen::Map<const Eigen::VectorXd> x(r, m);
+      double buffer[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
+      Eigen::Map<Eigen::VectorXd> y(buffer, m);
+      y.noalias() = B * x;
+      return x.dot(y);
+    }
   }
-  return v;
 }
 
 bool inside(const nurbs::Domain& d, const SurfaceParameter& t) {
@@ -367,9 +368,11 @@ constexpr std::size_t kCvPoints = 16384;
 // and its offset from the start surface, y_k = x_k − S⁰(u_k, v_k): made once per fit, used by every trial λ.
 // Above kCvPoints points, every stride-th point (in input order, so the same points for every λ): each term is
 // exact for its point, so the sum over the sample estimates the whole sum without bias, at a bounded cost.
+// The rows are ordered by knot span (stably: the same order for any thread count), so that each trial reads the
+// band inverse once per span, not once per point.
 struct CvRows {
   int m = 0;                 // basis functions per row, (p + 1)(q + 1)
-  std::vector<int> idx;      // m per row
+  std::vector<int> idx;      // m per row; idx[0] names the row's span (its first unknown)
   std::vector<double> R;     // m per row
   std::vector<Vector3> y;    // one per row
   std::vector<double> w;     // one per row
@@ -384,22 +387,34 @@ CvRows cv_rows(const Surface& s, const Ordering& order, std::span<const Point3> 
   for (std::size_t k = 0; k < n_points; k += stride) {
     if (weights.empty() || weights[k] != 0.0) chosen.push_back(k);
   }
-  CvRows rows;
-  rows.m = (p + 1) * (q + 1);
-  const std::size_t m = static_cast<std::size_t>(rows.m);
-  rows.idx.resize(chosen.size() * m);
-  rows.R.resize(chosen.size() * m);
-  rows.y.resize(chosen.size());
-  rows.w.resize(chosen.size());
+  const std::size_t m = static_cast<std::size_t>((p + 1) * (q + 1));
+  std::vector<int> idx(chosen.size() * m);
+  std::vector<double> R(chosen.size() * m);
+  std::vector<Vector3> y(chosen.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chosen.size(), 1024), [&](const auto& range) {
     RationalBasis rb;
     for (std::size_t r = range.begin(); r != range.end(); ++r) {
       const std::size_t k = chosen[r];
-      rows.y[r] = points[k] - basis_row(s, order, params[k], rb, &rows.idx[r * m]);
-      std::copy(rb.R, rb.R + m, &rows.R[r * m]);
-      rows.w[r] = weights.empty() ? 1.0 : weights[k];
+      y[r] = points[k] - basis_row(s, order, params[k], rb, &idx[r * m]);
+      std::copy(rb.R, rb.R + m, &R[r * m]);
     }
   });
+  std::vector<std::size_t> by_span(chosen.size());
+  std::iota(by_span.begin(), by_span.end(), std::size_t{0});
+  std::stable_sort(by_span.begin(), by_span.end(), [&](std::size_t a, std::size_t b) { return idx[a * m] < idx[b * m]; });
+  CvRows rows;
+  rows.m = static_cast<int>(m);
+  rows.idx.resize(idx.size());
+  rows.R.resize(R.size());
+  rows.y.resize(chosen.size());
+  rows.w.resize(chosen.size());
+  for (std::size_t r = 0; r < chosen.size(); ++r) {
+    const std::size_t from = by_span[r];
+    std::copy_n(&idx[from * m], m, &rows.idx[r * m]);
+    std::copy_n(&R[from * m], m, &rows.R[r * m]);
+    rows.y[r] = y[from];
+    rows.w[r] = weights.empty() ? 1.0 : weights[chosen[from]];
+  }
   return rows;
 }
 
@@ -407,26 +422,49 @@ CvRows cv_rows(const Surface& s, const Ordering& order, std::span<const Point3> 
 // leverage. Unlike GCV, which replaces each h_k by their mean, it sees a point that alone holds a control point
 // (h_k near 1): with scattered points on a fine basis that is where an almost unpenalised fit swings between
 // the points, and GCV, blind to it, would choose such a fit for exact data.
+// The leave-one-out terms of rows [first, last), in order; M is the row length m when fixed at compile time
+// (Eigen::Dynamic otherwise), so that a bicubic row's products stay in vector registers.
+template <int M>
+double leave_one_out_terms(const CvRows& rows, std::size_t first, std::size_t last, const std::vector<double>& D,
+                           const std::vector<double>& Z, int b) {
+  const int m = rows.m;
+  const std::size_t mm = static_cast<std::size_t>(m);
+  Eigen::Matrix<double, M, M> block(m, m);  // Z over the span's unknowns (gather_block)
+  Eigen::Matrix<double, M, 3> d(m, 3);      // D there
+  int span = -1;
+  double sum = 0.0;
+  for (std::size_t r = first; r < last; ++r) {
+    const int* idx = &rows.idx[r * mm];
+    if (idx[0] != span) {
+      span = idx[0];
+      gather_block(Z, b, idx, m, block.data());
+      for (int a = 0; a < m; ++a) {
+        const std::size_t I = static_cast<std::size_t>(idx[a]);
+        d.row(a) << D[3 * I], D[3 * I + 1], D[3 * I + 2];
+      }
+    }
+    const Eigen::Map<const Eigen::Matrix<double, M, 1>> R(&rows.R[r * mm], m);
+    const Vector3 fitted = d.transpose() * R;  // the displacement's value at the point: S − S⁰
+    const double v = R.dot(block * R);         // the point's variance factor: its leverage over its weight
+    const double one_minus_h = std::max(1.0 - rows.w[r] * v, 1e-6);
+    sum += rows.w[r] * (fitted - rows.y[r]).squaredNorm() / (one_minus_h * one_minus_h);
+  }
+  return sum;
+}
+
+// Leave-one-out cross-validation (Allen's PRESS): Σ w_k |r_k|² / (1 − h_k)², r_k the point's residual and h_k its
+// leverage. Unlike GCV, which replaces each h_k by their mean, it sees a point that alone holds a control point
+// (h_k near 1): with scattered points on a fine basis that is where an almost unpenalised fit swings between
+// the points, and GCV, blind to it, would choose such a fit for exact data.
 double leave_one_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b) {
-  const std::size_t n_rows = rows.y.size(), m = static_cast<std::size_t>(rows.m);
+  const std::size_t n_rows = rows.y.size();
   constexpr std::size_t kBlock = 4096;  // fixed blocks summed in order: the same sum for any thread count
   const std::size_t blocks = (n_rows + kBlock - 1) / kBlock;
   std::vector<double> part(blocks, 0.0);
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) {
-    double sum = 0.0;
-    for (std::size_t r = blk * kBlock; r < std::min(n_rows, (blk + 1) * kBlock); ++r) {
-      const int* idx = &rows.idx[r * m];
-      const double* R = &rows.R[r * m];
-      Vector3 fitted = Vector3::Zero();  // the displacement's value at the point: S − S⁰
-      for (std::size_t a = 0; a < m; ++a) {
-        const std::size_t I = static_cast<std::size_t>(idx[a]);
-        fitted += R[a] * Vector3(D[3 * I], D[3 * I + 1], D[3 * I + 2]);
-      }
-      const double v = band_quadratic_form(Z, b, idx, R, rows.m);
-      const double one_minus_h = std::max(1.0 - rows.w[r] * v, 1e-6);
-      sum += rows.w[r] * (fitted - rows.y[r]).squaredNorm() / (one_minus_h * one_minus_h);
-    }
-    part[blk] = sum;
+    const std::size_t first = blk * kBlock, last = std::min(n_rows, (blk + 1) * kBlock);
+    part[blk] = rows.m == 16 ? leave_one_out_terms<16>(rows, first, last, D, Z, b)  // bicubic: the pipeline's fits
+                             : leave_one_out_terms<Eigen::Dynamic>(rows, first, last, D, Z, b);
   });
   double total = 0.0;
   for (double x : part) total += x;
