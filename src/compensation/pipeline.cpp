@@ -881,6 +881,7 @@ void register_without_outliers(const PreparedModel& prepared, std::span<const Po
   second.searches += r.searches;
   second.coarse_iterations = r.coarse_iterations;
   second.starts = r.starts;
+  second.left_out = static_cast<int>(flagged.size());
   second.notes = std::move(r.notes);
   r = std::move(second);
 }

@@ -190,7 +190,8 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
     << ", \"iterations\": " << r.registration.iterations + r.registration.coarse_iterations
     << ", \"searches\": " << r.registration.searches
     << ", \"scale\": " << fmt("%.9g", r.registration.scale) << ", \"inliers\": " << r.registration.inliers
-    << ", \"starts\": " << r.registration.starts << ", \"free_motions\": [";
+    << ", \"starts\": " << r.registration.starts << ", \"left_out\": " << r.registration.left_out
+    << ", \"free_motions\": [";
   // Machine frame, as the transform maps to: the motions the data do not fix, held at the start.
   // Appended piecewise: GCC 12 flags `"[" + std::string` with a false -Wrestrict.
   const auto vec = [](const Vector3& v) {

@@ -421,11 +421,12 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
   if (!offsets.empty() && offsets.size() != n) {
     throw std::invalid_argument("register_points: one offset per point expected");
   }
-  if (n < 4 * kCoarseStagePoints) return iterate(model, machine_points, options, {}, offsets);
+  const std::size_t subset_size = std::min(kCoarseStagePoints, n / 4);
+  if (subset_size < kMinCoarseStagePoints) return iterate(model, machine_points, options, {}, offsets);
   // Coarse stage: a spread subset (every k-th point) brings the model close, where closest points are cheap.
   // Then each point's Newton starts from the foot of its nearest subset point, and the full set iterates on;
   // an exact pass still confirms every correspondence before convergence is accepted.
-  const std::size_t stride = n / kCoarseStagePoints;
+  const std::size_t stride = n / subset_size;
   std::vector<Point3> subset;
   std::vector<double> subset_offsets;
   for (std::size_t i = 0; i < n; i += stride) {

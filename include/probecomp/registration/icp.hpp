@@ -77,6 +77,7 @@ struct RegistrationResult {
   int searches = 0;             // closest-point searches of all points; the other iterations slide on tangent planes
   int coarse_iterations = 0;    // on the subset first (large point sets; see kCoarseStagePoints)
   int starts = 1;               // starting transforms tried (more than one: a coarse alignment, credibility.hpp)
+  int left_out = 0;             // points the fits flagged that a second registration left out (0: registered once)
   int used = 0;                // correspondences used in the last step (not on an edge, within max_distance)
   int inliers = 0;
   Constraints constraints;     // the motions the data fix; the free ones were held at the start
@@ -86,9 +87,11 @@ struct RegistrationResult {
   [[nodiscard]] bool converged() const { return status == Status::Converged; }
 };
 
-// Above 4× this many points, a spread subset of about this many is registered first: closest points far from
-// the model are the costly ones, and the subset takes the whole set close for a fraction of the cost.
+// A spread subset of a quarter of the points, at most this many, is registered first: closest points far from the
+// model are the costly ones, and the subset takes the whole set close for a fraction of the cost...
 inline constexpr std::size_t kCoarseStagePoints = 4096;
+// ... when it holds at least this many (4 096 points and more; 10 000 points: 3 searches of all of them instead of 6).
+inline constexpr std::size_t kMinCoarseStagePoints = 1024;
 
 // Registers `machine_points` (machine frame) to the model behind `model` (CAD frame). The result's transform
 // maps CAD to machine. Points on an edge, not found, or not finite are reported, never used. `offsets`, when given
