@@ -9,7 +9,7 @@
 namespace probecomp::cad {
 
 namespace {
-// Above 4 × this many points a spread subset of about this many votes first (see decide_material_side)...
+// A spread subset of a quarter of the points, at most this many, votes first (see decide_material_side)...
 constexpr std::size_t kVoteSubset = 1 << 16;
 // ... and decides a face that holds at least this many of its votes, this share of them for one side. A face with
 // fewer (a small face, or one no point is nearest to) is decided by all the points, as without the subset.
@@ -72,9 +72,11 @@ std::vector<MaterialSide> decide_material_side(Model& model, std::span<const Poi
   };
   // Many points: a spread subset votes first, a closest-point search for each of its points instead of a million.
   // It decides when every undecided face holds enough of its votes and a clear majority; else all points vote.
+  // (From 4 000 points, where the subset can hold a decisive count: 10 000 points, 2 500 searches instead of 10 000.)
   bool decided = false;
-  if (raw_centres.size() > 4 * kVoteSubset) {
-    vote(geometry::spread_subset_indices(raw_centres, kVoteSubset));
+  const std::size_t subset = std::min(kVoteSubset, raw_centres.size() / 4);
+  if (subset >= static_cast<std::size_t>(kDecisiveVotes)) {
+    vote(geometry::spread_subset_indices(raw_centres, subset));
     decided = true;
     for (std::size_t f = 0; f < model.faces.size(); ++f) {
       if (model.faces[f].material_known) continue;

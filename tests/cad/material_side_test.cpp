@@ -74,5 +74,18 @@ TEST(MaterialSide, ManyPointsVoteByASubsetUnlessAFaceHasTooFewVotesThere) {
   }
 }
 
+TEST(MaterialSide, TenThousandPointsVoteByAQuarterOfThem) {
+  // 10 000 points on one face: a spread quarter (every 4th point) decides it, as the data would all together.
+  const nurbs::Surface s = testing::random_rational_surface(22, {.nu = 8, .nv = 8, .height = 6.0});
+  const Probed p = probe(kMisalignment, s, 1.0, -1, 100);
+  cad::Model m = single_face_model(s, +1, false);
+  const std::vector<MaterialSide> sides = decide_material_side(m, p.centres, std::nullopt, geometry::RigidTransform::Identity());
+  EXPECT_EQ(sides[0].outward, -1);
+  EXPECT_EQ(sides[0].source, MaterialSource::Data);
+  EXPECT_GE(sides[0].points, 1000);
+  EXPECT_LE(sides[0].points, 2500);
+  EXPECT_GT(sides[0].agreeing, 0.99 * sides[0].points);
+}
+
 }  // namespace
 }  // namespace probecomp::cad
