@@ -48,6 +48,9 @@ struct ClosestPointResult {
   // times the curvature's). Zero where unknown (a point found on a trim boundary): a caller that needs the normal
   // evaluates it.
   Vector3 Su = Vector3::Zero(), Sv = Vector3::Zero();
+  // How flat the distance is there (1 on a plane, falling towards 0 near a centre of curvature, where a second
+  // minimum may lie close by), from Newton's last Hessian; NaN where not known (a global search's answer).
+  double flatness = std::numeric_limits<double>::quiet_NaN();
 
   [[nodiscard]] bool ok() const {
     return status == ClosestPointStatus::Converged || status == ClosestPointStatus::OnBoundary;
