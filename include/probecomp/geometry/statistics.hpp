@@ -11,10 +11,10 @@ namespace probecomp::geometry {
 inline constexpr double kMadToSigma = 1.4826;
 
 // The upper median (element n/2 in sorted order; for an even count the larger of the two middle values).
-// Reorders `values`; deterministic for a given input order. 0 for no values.
+// May reorder `values` (large sets are left as they are, found in parallel); the value is exact. 0 for no values.
 [[nodiscard]] double upper_median_in_place(std::span<double> values);
 
-// The median (the mean of the two middle values for an even count). Reorders `values`. 0 for no values.
+// The median (the mean of the two middle values for an even count). May reorder `values`. 0 for no values.
 [[nodiscard]] double median_in_place(std::span<double> values);
 
 // 1.4826 · upper median |r| over the residuals, but at least `min_scale`; `min_scale` when there are none.
