@@ -29,8 +29,8 @@ __extension__ typedef unsigned __int128 Uint128;
 // round (half to even on v's exact binary value), when that is exact in integers: v = M·2^E (M < 2^53), so
 // v·10^p = M·5^p·2^(E+p), and M·5^p (p ≤ 12: under 2^81) shifted right by −(E + p) bits is the digits, the bits
 // shifted out deciding the rounding. The end of the text, or null where this does not apply (a shift left, a
-// result of 2^63 or more, p > 12, not finite): then std::to_chars. Three to four times as fast as it on a CSV's
-// numbers (a million rows write 7 million of them).
+// result of 2^63 or more, p > 12, not finite): then std::to_chars, whose fixed format is the slower part of writing a
+// CSV (a million rows write 7 million numbers: the whole write 0.74 s with it alone, 0.40 s with this first).
 inline char* fixed_chars(char* buf, double v, int precision) {
   if (precision < 0 || precision > 12 || !std::isfinite(v)) return nullptr;
   const std::uint64_t bits = std::bit_cast<std::uint64_t>(v);
