@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -422,11 +423,7 @@ CvRows cv_rows(const Surface& s, const Ordering& order, std::span<const Point3> 
   return rows;
 }
 
-// Leave-one-out cross-validation (Allen's PRESS): Σ w_k |r_k|² / (1 − h_k)², r_k the point's residual and h_k its
-// leverage. Unlike GCV, which replaces each h_k by their mean, it sees a point that alone holds a control point
-// (h_k near 1): with scattered points on a fine basis that is where an almost unpenalised fit swings between
-// the points, and GCV, blind to it, would choose such a fit for exact data.
-// The leave-one-out terms of rows [first, last), in order; M is the row length m when fixed at compile time
+// The leave-one-out terms of rows [first, last), in order (see leave_one_out); M is the row length m when fixed at compile time
 // (Eigen::Dynamic otherwise), so that a bicubic row's products stay in vector registers, as in
 // block_quadratic_form (the 10 000-point case's 17 trials: 22.8 ms a point at a time from the band, 8.5 ms so).
 template <int M>
@@ -450,7 +447,7 @@ double leave_one_out_terms(const CvRows& rows, std::size_t first, std::size_t la
     }
     const Eigen::Map<const Eigen::Matrix<double, M, 1>> R(&rows.R[r * mm], m);
     const Vector3 fitted = d.transpose() * R;  // the displacement's value at the point: S − S⁰
-    const double v = R.dot(block * R);         // the point's variance factor: its leverage over its weight
+    const double v = block_quadratic_form(block.data(), R.data(), m);  // its leverage over its weight
     const double one_minus_h = std::max(1.0 - rows.w[r] * v, 1e-6);
     sum += rows.w[r] * (fitted - rows.y[r]).squaredNorm() / (one_minus_h * one_minus_h);
   }
@@ -545,8 +542,9 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   const double ridge = options.ridge * data_trace / n;
 
   const CvRows rows = cv_rows(start, order, points, params, weights);
+  std::atomic<int> evaluations{0};  // trials may run side by side
   auto run = [&](double t10) {
-    ++result.evaluations;
+    ++evaluations;
     return evaluate(data, G, scale_ratio, ridge, t10, rows);
   };
   // Each trial keeps its factor and its band inverse, so the best one is used as it is, not evaluated again.
@@ -563,21 +561,14 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
       for (double t10 = options.min_log10_smoothing; t10 <= options.max_log10_smoothing + 1e-9; t10 += options.scan_step) {
         scan.push_back(t10);
       }
-      // The scan's trials are independent: side by side when each one's factor and band inverse are small, all
-      // kept until compared in scan order (the same choice for any thread count); one at a time otherwise.
+      // The scan's trials are independent: all side by side when their factors and band inverses together are
+      // small, else one at a time; compared in scan order (the same choice for any thread count).
       const std::size_t trial_bytes = 2 * sizeof(double) * static_cast<std::size_t>(n) * static_cast<std::size_t>(b + 1);
-      if (trial_bytes * scan.size() <= kParallelScanBytes) {
-        std::vector<Trial> trials(scan.size());
-        tbb::parallel_for(std::size_t{0}, scan.size(), [&](std::size_t k) {
-          trials[k] = evaluate(data, G, scale_ratio, ridge, scan[k], rows);
-        });
-        result.evaluations += static_cast<int>(scan.size());
+      const std::size_t at_once = trial_bytes * scan.size() <= kParallelScanBytes ? scan.size() : 1;
+      for (std::size_t first = 0; first < scan.size(); first += at_once) {
+        std::vector<Trial> trials(std::min(at_once, scan.size() - first));
+        tbb::parallel_for(std::size_t{0}, trials.size(), [&](std::size_t k) { trials[k] = run(scan[first + k]); });
         for (Trial& t : trials) {
-          if (t.ok && t.cv_score < best.cv_score) best = std::move(t);
-        }
-      } else {
-        for (const double t10 : scan) {
-          Trial t = run(t10);
           if (t.ok && t.cv_score < best.cv_score) best = std::move(t);
         }
       }
@@ -587,9 +578,7 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     }
     double x1 = hi - kGolden * (hi - lo), x2 = lo + kGolden * (hi - lo);
     Trial t1, t2;
-    tbb::parallel_invoke([&] { t1 = evaluate(data, G, scale_ratio, ridge, x1, rows); },
-                         [&] { t2 = evaluate(data, G, scale_ratio, ridge, x2, rows); });
-    result.evaluations += 2;
+    tbb::parallel_invoke([&] { t1 = run(x1); }, [&] { t2 = run(x2); });
     for (int step = 0; step < options.golden_steps; ++step) {
       if (t1.cv_score <= t2.cv_score) {
         hi = x2;
@@ -608,6 +597,7 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     Trial& golden = t1.cv_score <= t2.cv_score ? t1 : t2;
     if (golden.cv_score <= best.cv_score) best = std::move(golden);
   }
+  result.evaluations = evaluations;
   if (!best.ok) {
     result.status = PenalizedFitResult::Status::NumericalError;
     return result;

@@ -1,5 +1,6 @@
 #include "probecomp/geometry/statistics.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -22,11 +23,11 @@ constexpr std::size_t kSample = 4096;
 constexpr std::size_t kBracket = 256;
 constexpr std::size_t kChunks = 64;  // fixed, so that the work does not depend on the thread count
 
-// The (k − 1)-th and k-th smallest values (0-based; the first is the k-th when k = 0), exactly, the values left in
-// their order. Floyd and Rivest's selection (1975): two order statistics of a spread sample bracket the k-th
-// value; the values between them are counted and gathered in parallel, and only they are selected among. When the
-// bracket misses (never seen: 8 standard deviations), all of them are.
-std::pair<double, double> select_parallel(std::span<const double> values, std::size_t k) {
+// The (k − 1)-th and k-th smallest values (0-based; the first is the k-th when k = 0), exactly. Floyd and Rivest's
+// selection (1975): two order statistics of a spread sample bracket the k-th value; the values between them are
+// counted and gathered in parallel, and only they are selected among. When the bracket misses (never seen: 8
+// standard deviations), all of them are, in place.
+std::pair<double, double> select_parallel(std::span<double> values, std::size_t k) {
   const std::size_t n = values.size();
   std::vector<double> sample(kSample);
   for (std::size_t i = 0; i < kSample; ++i) sample[i] = values[i * n / kSample];
@@ -60,10 +61,9 @@ std::pair<double, double> select_parallel(std::span<const double> values, std::s
     offset[c + 1] = offset[c] + counts[c].between;
   }
   if (k < below || k >= below + offset[kChunks]) {
-    std::vector<double> all(values.begin(), values.end());
-    const auto kth = all.begin() + static_cast<std::ptrdiff_t>(k);
-    std::nth_element(all.begin(), kth, all.end());
-    return {k > 0 ? *std::max_element(all.begin(), kth) : *kth, *kth};
+    const auto kth = values.begin() + static_cast<std::ptrdiff_t>(k);
+    std::nth_element(values.begin(), kth, values.end());
+    return {k > 0 ? *std::max_element(values.begin(), kth) : *kth, *kth};
   }
   std::vector<double> between(offset[kChunks]);
   tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
@@ -109,15 +109,9 @@ double robust_scale(std::span<const double> residuals, double min_scale) {
 
 double robust_scale_in_place(std::span<double> residuals, double min_scale) {
   if (residuals.empty()) return min_scale;
-  if (residuals.size() >= kParallelSelection) {
-    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
-      for (std::size_t i = residuals.size() * c / kChunks; i < residuals.size() * (c + 1) / kChunks; ++i) {
-        residuals[i] = std::abs(residuals[i]);
-      }
-    });
-  } else {
-    for (double& r : residuals) r = std::abs(r);
-  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, residuals.size(), std::size_t{1} << 16), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) residuals[i] = std::abs(residuals[i]);
+  });
   return std::max(kMadToSigma * upper_median_in_place(residuals), min_scale);
 }
 

@@ -41,9 +41,11 @@ inline char* fixed_chars(char* buf, double v, int precision) {
   const int E = exponent_field == 0 ? -1074 : exponent_field - 1075;
   const int shift = -(E + precision);
   if (shift <= 0) return nullptr;
-  std::uint64_t five = 1;
-  for (int k = 0; k < precision; ++k) five *= 5;
-  const Uint128 X = static_cast<Uint128>(M) * five;
+  constexpr std::uint64_t kPowersOf5[13] = {1, 5, 25, 125, 625, 3125, 15625, 78125, 390625, 1953125, 9765625,
+                                             48828125, 244140625};
+  constexpr std::uint64_t kPowersOf10[13] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000, 100000000,
+                                             1000000000, 10000000000, 100000000000, 1000000000000};
+  const Uint128 X = static_cast<Uint128>(M) * kPowersOf5[precision];
   std::uint64_t N = 0;
   if (shift < 128) {
     const Uint128 q = X >> shift;
@@ -53,8 +55,7 @@ inline char* fixed_chars(char* buf, double v, int precision) {
     N = static_cast<std::uint64_t>(q);
     if (rest > half || (rest == half && (N & 1) != 0)) ++N;
   }
-  std::uint64_t scale = 1;
-  for (int k = 0; k < precision; ++k) scale *= 10;
+  const std::uint64_t scale = kPowersOf10[precision];
   char* at = buf;
   if (negative) *at++ = '-';  // printf's sign, also where the digits round to zero
   at = std::to_chars(at, at + 24, N / scale).ptr;
