@@ -16,6 +16,7 @@
 #include <stdexcept>
 
 #include "probecomp/geometry/point_tree.hpp"
+#include "probecomp/registration/osculating_patch.hpp"
 
 namespace probecomp::registration {
 
@@ -49,18 +50,21 @@ struct Step {
 // and it is clearly smaller: a steady linear convergence, not an oscillation or a first large move.
 constexpr double kAitkenCosine = 0.99;
 constexpr double kAitkenMaxRatio = 0.7;
-// A search is exact (confirming) when the step right after the one before moved points by at most this many motion
-// tolerances: the steps since were a settling, not a move the next search will still correct.
-constexpr double kConfirmingStep = 10.0;
+// Points slide on their feet's osculating paraboloids until they have moved this many robust scales since the last
+// search. A paraboloid's distance is out by about |∇κ| D³/6 after a slide of D: at D = 2σ̂ = 0.1 mm on a face curved
+// to a radius of 10 mm that changes over 10 mm, 2e-6 mm. A tangent plane's would be κD²/2 = 5e-4 mm.
+constexpr double kSlideReach = 2.0;
 
 bool usable(const cad::ModelPoint& m, double max_distance) {
   return m.ok() && !m.on_trim_edge && m.status != ClosestPointStatus::OnBoundary && std::abs(m.distance) <= max_distance;
 }
 
 // The step of one iteration from the points x (CAD frame), their feet and weights w (0: unused), as a motion
-// about the data's centroid c (carried along with the data) with rotations scaled by their RMS radius L.
+// about the data's centroid c (carried along with the data) with rotations scaled by their RMS radius L. With
+// `patches` (one per point), each point's distance and its gradient come from its foot's osculating paraboloid
+// (where the patch is valid), else from the foot's tangent plane.
 Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::ModelPoint> feet, std::span<const double> w,
-              const Point3& c, double L) {
+              std::span<const OsculatingPatch> patches, const Point3& c, double L) {
   Step step;
   // Partial sums over a fixed number of consecutive chunks, in parallel, then added in chunk order: the result
   // does not depend on the thread count.
@@ -76,10 +80,16 @@ Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::Mod
     const std::size_t first = x.size() * chunk / kChunks, last = x.size() * (chunk + 1) / kChunks;
     for (std::size_t i = first; i < last; ++i) {
       if (w[i] == 0.0) continue;
-      const Vector3& n = feet[i].normal;
+      Vector3 n = feet[i].normal;
+      double r = n.dot(x[i] - feet[i].point);
+      if (!patches.empty() && patches[i].valid()) {
+        const OsculatingPatch::Prediction p = patches[i].predict(feet[i].point, n, x[i]);
+        r = p.distance;
+        n = p.gradient;
+      }
       const Vector3 a = (x[i] - c).cross(n) / L;
       const double J[6] = {a.x(), a.y(), a.z(), n.x(), n.y(), n.z()};
-      const double wr = w[i] * n.dot(x[i] - feet[i].point);
+      const double wr = w[i] * r;
       int e = 0;
       for (int row = 0; row < 6; ++row) {
         const double wJ = w[i] * J[row];
@@ -197,6 +207,10 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   std::vector<double> r(n), w(n);
   std::vector<char> use(n, 0);  // the point's correspondence enters the estimate (its weight may still be 0)
   std::vector<double> used_r;
+  // The surface about each target to second order, for the slides between searches; made at the first slide after a
+  // search (a search that confirms convergence needs none).
+  std::vector<OsculatingPatch> patches;
+  bool patches_current = false;
   double scale = options.robust.min_scale;
   double max_radius = 0.0;
   Point3 centre = Point3::Zero();
@@ -237,6 +251,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
     for_blocks(n, [&](std::size_t first, std::size_t last) {
       for (std::size_t i = first; i < last; ++i) x[i] = to_cad * machine_points[i];
     });
+    patches_current = false;
     if (feet.empty()) {
       feet = model.closest_points(x);
     } else {
@@ -257,18 +272,49 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
     });
     return reweigh();
   };
-  // Point-to-plane between correspondences: the points moved by `motion` against their feet's tangent planes.
-  // For a motion D since the feet were found, a plane differs from the surface by about κD²/2 (κ its curvature):
-  // while D stays within the residuals' own scale this is far below it, and reweighting on the planes converges
-  // the robust weights (IRLS, linear: many steps) at the cost of a pass over the arrays instead of a closest-point
-  // search each step. A later exact search corrects what the planes miss: above all the curvature that fixes the
-  // motions a nearly flat face fixes only weakly, which planes do not see (1 M points on the demo's panel: the search
-  // after the slide still moves them 9e-5 mm; 3 searches in all, where every step searched before: 18).
-  auto slide_on_planes = [&](const geometry::RigidTransform& motion) {
+  // Between searches the points move against their targets' osculating paraboloids (osculating_patch.hpp) rather
+  // than searching again: a pass over the arrays instead of a closest-point search each step, while reweighting
+  // converges the robust weights (IRLS, linear: many steps). The paraboloid also gives the parameters of each point's
+  // foot, so a point whose foot crosses its face's edge or trim leaves the estimate (or joins it) as the next search
+  // would have it. Tangent planes saw neither the curvature, which fixes the motions a gently curved face fixes only
+  // weakly, nor the edges: a million points on the demo's panel needed 3 searches (the one after the slides still
+  // moved them 9e-5 mm, from 38 points that crossed the panel's edge); with paraboloids the one after the slides
+  // confirms.
+  auto make_patches = [&]() {
+    const cad::Model& cad_model = model.model();
+    patches.resize(n);
+    for_blocks(n, [&](std::size_t first, std::size_t last) {
+      for (std::size_t i = first; i < last; ++i) {
+        const cad::ModelPoint& m = feet[i];
+        patches[i] = OsculatingPatch{};
+        patches[i].A[0] = std::numeric_limits<float>::quiet_NaN();
+        if (!m.ok() || m.face < 0 || !x[i].allFinite()) continue;
+        const cad::Face& face = cad_model.faces[static_cast<std::size_t>(m.face)];
+        patches[i] = OsculatingPatch::at(nurbs::derivatives_d2(face.surface, m.u, m.v), m.normal,
+                                         offsets.empty() ? 0.0 : offsets[i]);
+      }
+    });
+    patches_current = true;
+  };
+  auto slide = [&](const geometry::RigidTransform& motion) {
+    if (!patches_current) make_patches();
+    const cad::Model& cad_model = model.model();
     for_blocks(n, [&](std::size_t first, std::size_t last) {
       for (std::size_t i = first; i < last; ++i) {
         x[i] = motion * x[i];
-        if (use[i]) r[i] = targets[i].normal.dot(x[i] - targets[i].point);
+        const cad::ModelPoint& m = targets[i];
+        if (!patches[i].valid()) {
+          if (use[i]) r[i] = m.normal.dot(x[i] - m.point);
+          continue;
+        }
+        const OsculatingPatch::Prediction p = patches[i].predict(m.point, m.normal, x[i]);
+        const cad::Face& face = cad_model.faces[static_cast<std::size_t>(m.face)];
+        const nurbs::Domain dom = face.surface.domain();
+        const double u = m.u + p.du, v = m.v + p.dv;
+        // Strictly inside: a foot on the domain's edge is a constrained minimum, which the estimate does not use.
+        const bool inside = u > dom.u0 && u < dom.u1 && v > dom.v0 && v < dom.v1 && (!face.trimmed() || face.trim->contains(u, v));
+        use[i] = x[i].allFinite() && inside && std::abs(p.distance) <= options.max_distance;
+        r[i] = use[i] ? p.distance : 0.0;
       }
     });
     return reweigh();
@@ -282,21 +328,18 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   geometry::RigidTransform last_motion = geometry::RigidTransform::Identity();
   const bool hinted_start = !feet.empty();
   double drift = 0.0;  // largest motion of a point since its correspondence was found, mm
-  double first_moved = 0.0;  // the largest motion of the step right after the last search, mm
-  int locals_in_a_row = 0;   // local searches since the last exact one
-  double reach = 0.0;  // how far points may slide on their tangent planes before a new search, mm
+  double reach = 0.0;  // how far points may slide on their osculating paraboloids before a new search, mm
   std::size_t used = 0;
   for (int it = 1; it <= options.criteria.max_iterations; ++it) {
     const bool fresh = search_next;  // correspondences found at the current transform
     if (fresh) {
       exact = (it == 1 && !hinted_start) || next == Search::Exact;
       used = correspond(next);
-      locals_in_a_row = exact ? 0 : locals_in_a_row + 1;
       ++result.searches;
       drift = 0.0;
-      reach = scale;
+      reach = kSlideReach * scale;
     } else {
-      used = slide_on_planes(last_motion);
+      used = slide(last_motion);
     }
     result.iterations = it;
     if (used < needed) {
@@ -326,7 +369,8 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
       centre = 0.5 * (box.min + box.max);
       max_radius = 0.5 * box.diagonal();
     }
-    const Step step = estimate(options.metric, x, targets, w, centroid, length);
+    const Step step = estimate(options.metric, x, targets, w, fresh ? std::span<const OsculatingPatch>() : patches,
+                               centroid, length);
     result.constraints = step.constraints;
     if (!step.finite) {
       result.status = Status::NumericalError;
@@ -358,18 +402,15 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
         std::max(options.criteria.motion_tolerance,
                  options.criteria.relative_motion_tolerance * scale / std::sqrt(static_cast<double>(used)));
     drift += moved;
-    if (fresh) first_moved = moved;
     if (moved <= tolerance) {
       if (fresh && exact) {
         result.status = Status::Converged;
         result.stop_reason = "converged: the last update moved no point more than " + describe(moved);
         break;
       }
-      // Settled on these correspondences: search again where the points now are. Exact, to confirm, when the step
-      // right after the last search was already small (so this one is expected to confirm); else the points still
-      // move after it, and a local search (Newton from each foot) serves, as for the steps before (1 M points on the
-      // demo's panel: the search after the first slide moves them 1.4e-5 mm, 3 tolerances, and the next confirms).
-      next = first_moved <= kConfirmingStep * tolerance || locals_in_a_row >= 2 ? Search::Exact : Search::Local;
+      // Settled on these correspondences: search again where the points now are, exactly, to confirm (the slides
+      // were on second-order models, so the search is expected to move the points no further than the tolerance).
+      next = Search::Exact;
       search_next = true;
     } else {
       next = Search::Local;
