@@ -221,10 +221,13 @@ void check_registration(const registration::RegistrationResult& r) {
   }
 }
 
-// The distance of x from its foot point on `face`, + on the outward side.
+// The distance of x from its foot point on `face`, + on the outward side. Only the side is taken from the normal,
+// so Newton's own tangents serve where it gives them and they are not (nearly) parallel: one evaluation fewer a
+// point (a million deviations: 2 evaluations each instead of 3).
 double signed_distance(const cad::Face& face, const Point3& x, const nurbs::ClosestPointResult& foot) {
-  const nurbs::UnitNormal n = nurbs::unit_normal(face.surface, foot.u, foot.v);
-  const double side = (x - foot.point).dot(static_cast<double>(face.outward) * n.n);
+  Vector3 n = foot.Su.cross(foot.Sv);
+  if (!(n.norm() > 1e-8 * foot.Su.norm() * foot.Sv.norm())) n = nurbs::unit_normal(face.surface, foot.u, foot.v).n;
+  const double side = (x - foot.point).dot(static_cast<double>(face.outward) * n);
   return side < 0.0 ? -foot.distance : foot.distance;
 }
 
