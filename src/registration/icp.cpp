@@ -176,10 +176,12 @@ Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::Mod
 
 // f(first, last) over consecutive blocks of [0, n), in parallel: for the per-point passes of each step, which
 // write only their own points' entries.
+// `grain`: the fewest points a block holds; smaller for passes that evaluate the surface or a patch (tens to hundreds
+// of ns a point: 10 000 points in one block would leave a core idle).
+constexpr std::size_t kEvaluatingGrain = 1024;
 template <class F>
-void for_blocks(std::size_t n, F&& f) {
-  constexpr std::size_t kGrain = 1 << 14;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain),
+void for_blocks(std::size_t n, F&& f, std::size_t grain = 1 << 14) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
                     [&](const tbb::blocked_range<std::size_t>& range) { f(range.begin(), range.end()); });
 }
 
@@ -251,6 +253,20 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
     for_blocks(n, [&](std::size_t first, std::size_t last) {
       for (std::size_t i = first; i < last; ++i) x[i] = to_cad * machine_points[i];
     });
+    if (patches_current) {
+      // After slides, Newton starts from the parameters each foot's paraboloid predicts where the point now is, not
+      // from the foot's own: off by about κt² instead of t (t the slide's tangential part), one Newton step fewer.
+      const cad::Model& cad_model = model.model();
+      for_blocks(n, [&](std::size_t first, std::size_t last) {
+        for (std::size_t i = first; i < last; ++i) {
+          if (!patches[i].valid() || !x[i].allFinite()) continue;
+          const OsculatingPatch::Prediction p = patches[i].predict(targets[i].point, targets[i].normal, x[i]);
+          const nurbs::Domain dom = cad_model.faces[static_cast<std::size_t>(feet[i].face)].surface.domain();
+          feet[i].u = std::clamp(feet[i].u + p.du, dom.u0, dom.u1);
+          feet[i].v = std::clamp(feet[i].v + p.dv, dom.v0, dom.v1);
+        }
+      }, kEvaluatingGrain);
+    }
     patches_current = false;
     if (feet.empty()) {
       feet = model.closest_points(x);
@@ -293,7 +309,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
         patches[i] = OsculatingPatch::at(nurbs::derivatives_d2(face.surface, m.u, m.v), m.normal,
                                          offsets.empty() ? 0.0 : offsets[i]);
       }
-    });
+    }, kEvaluatingGrain);
     patches_current = true;
   };
   auto slide = [&](const geometry::RigidTransform& motion) {
@@ -316,7 +332,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
         use[i] = x[i].allFinite() && inside && std::abs(p.distance) <= options.max_distance;
         r[i] = use[i] ? p.distance : 0.0;
       }
-    });
+    }, kEvaluatingGrain);
     return reweigh();
   };
 
