@@ -385,6 +385,12 @@ ModelPoint ModelLocator::closest_point_on_other_faces(const Point3& query, int e
 }
 
 ModelPoint ModelLocator::closest_point(const Point3& query, const ModelPoint& hint, HintedSearch mode) const {
+  return closest_point(query, hint, mode, nullptr);
+}
+
+ModelPoint ModelLocator::closest_point(const Point3& query, const ModelPoint& hint, HintedSearch mode,
+                                       nurbs::OsculatingPatch* patch) const {
+  if (patch != nullptr) *patch = nurbs::OsculatingPatch::invalid();
   if (!hint.ok() || hint.face < 0 || hint.face >= static_cast<int>(faces_.size()) || !query.allFinite()) {
     return closest_point(query);
   }
@@ -398,6 +404,11 @@ ModelPoint ModelLocator::closest_point(const Point3& query, const ModelPoint& hi
   ModelPoint best = make_point(query, hint.face, local, false);
   if (mode == HintedSearch::Exact && !face.analytic) visit_face(query, hint.face, best, &local);
   search(query, best, hint.face);
+  // The patch from Newton's own derivatives when its foot stood.
+  if (patch != nullptr && best.face == hint.face && best.u == local.u && best.v == local.v && local.Suu.allFinite()) {
+    *patch = nurbs::OsculatingPatch::at(nurbs::SurfaceD2{local.point, local.Su, local.Sv, local.Suu, local.Suv, local.Svv},
+                                        best.normal);
+  }
   return best;
 }
 
@@ -409,10 +420,15 @@ std::vector<ModelPoint> ModelLocator::closest_points(std::span<const Point3> que
 }
 
 void ModelLocator::update_closest_points(std::span<const Point3> queries, std::span<ModelPoint> feet,
-                                         HintedSearch mode) const {
+                                         HintedSearch mode, std::span<nurbs::OsculatingPatch> patches) const {
   if (feet.size() != queries.size()) throw std::invalid_argument("update_closest_points: one foot per query expected");
+  if (!patches.empty() && patches.size() != queries.size()) {
+    throw std::invalid_argument("update_closest_points: one patch per query expected");
+  }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, queries.size(), 64), [&](const auto& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i) feet[i] = closest_point(queries[i], feet[i], mode);
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      feet[i] = closest_point(queries[i], feet[i], mode, patches.empty() ? nullptr : &patches[i]);
+    }
   });
 }
 

@@ -146,6 +146,9 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
     result.distance = std::sqrt(it.f);
     result.Su = it.d.Su;
     result.Sv = it.d.Sv;
+    result.Suu = it.d.Suu;
+    result.Suv = it.d.Suv;
+    result.Svv = it.d.Svv;
     return result;
   };
 
@@ -194,6 +197,9 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
       result.distance = dist1;
       result.Su = it.d.Su + a * it.d.Suu + b * it.d.Suv;
       result.Sv = it.d.Sv + a * it.d.Suv + b * it.d.Svv;
+      result.Suu = it.d.Suu;
+      result.Suv = it.d.Suv;
+      result.Svv = it.d.Svv;
       return result;
     }
     Iterate next = it;

@@ -8,6 +8,8 @@
 #include <BRep_Tool.hxx>
 #include <TopoDS_Compound.hxx>
 #include <gtest/gtest.h>
+
+#include <iostream>
 #include <tbb/task_arena.h>
 
 #include <limits>
@@ -201,6 +203,52 @@ TEST(ModelLocator, FeetUpdatedInPlaceEqualTheUnhintedSearch) {
   expect_same_answers(locator.closest_points(q.after), feet);
   std::vector<ModelPoint> wrong(q.after.size() - 1);
   EXPECT_THROW(locator.update_closest_points(q.after, wrong), std::invalid_argument);
+}
+
+TEST(ModelLocator, PatchesFromALocalSearchAreThoseOfTheSurfaceAtEachFoot) {
+  // ICP's local search hands out each foot's osculating paraboloid from Newton's own derivatives. Against the patch
+  // made from a fresh evaluation at the foot, on a real file's faces (free-form and elementary, trimmed): the same
+  // distance and parameters predicted for a point 0.05 mm along the face, or an invalid patch where Newton's foot did
+  // not stand (a closed form, another face, a trim boundary), which ICP then makes itself.
+  for (const char* file : {"gismo_hammer.iges", "asitus_wavy-cube.stp"}) {
+    const Model model = read_model(kCadDir / file);
+    const ModelLocator locator(model);
+    const MovedQueries q = moved_queries(model, 13, 0.05);
+    std::vector<ModelPoint> feet = locator.closest_points(q.before);
+    std::vector<nurbs::OsculatingPatch> patches(q.after.size());
+    locator.update_closest_points(q.after, feet, ModelLocator::HintedSearch::Local, patches);
+    int valid = 0, compared = 0;
+    for (std::size_t k = 0; k < feet.size(); ++k) {
+      if (!patches[k].valid()) continue;
+      ++valid;
+      ASSERT_TRUE(feet[k].ok()) << k;
+      const Face& face = model.faces[static_cast<std::size_t>(feet[k].face)];
+      EXPECT_FALSE(face.analytic) << k;  // a closed form carries no second derivatives
+      const nurbs::OsculatingPatch fresh =
+          nurbs::OsculatingPatch::at(nurbs::derivatives_d2(face.surface, feet[k].u, feet[k].v), feet[k].normal);
+      if (!fresh.valid()) continue;
+      ++compared;
+      // A point 0.05 mm along the face's tangent plane and 0.01 mm off it.
+      const Vector3 t = feet[k].normal.unitOrthogonal();
+      const Point3 x = feet[k].point + 0.05 * t + 0.01 * feet[k].normal;
+      const nurbs::OsculatingPatch::Prediction a = patches[k].predict(feet[k].point, feet[k].normal, x);
+      const nurbs::OsculatingPatch::Prediction b = fresh.predict(feet[k].point, feet[k].normal, x);
+      EXPECT_NEAR(a.distance, b.distance, 1e-9) << k;
+      EXPECT_NEAR(a.du, b.du, 1e-6 * (std::abs(b.du) + std::abs(b.dv))) << k;
+      EXPECT_NEAR(a.dv, b.dv, 1e-6 * (std::abs(b.du) + std::abs(b.dv))) << k;
+      EXPECT_LT((a.gradient - b.gradient).norm(), 1e-6) << k;
+    }
+    int elementary = 0;
+    for (const ModelPoint& m : feet) {
+      elementary += m.ok() && model.faces[static_cast<std::size_t>(m.face)].analytic != nullptr;
+    }
+    std::cout << "[ measured ] " << file << ": " << valid << " of " << feet.size() << " patches from Newton, " << compared
+              << " compared; " << elementary << " feet on elementary faces\n";
+    EXPECT_GT(valid, static_cast<int>(feet.size() - elementary) / 2) << file;
+    std::vector<nurbs::OsculatingPatch> wrong(q.after.size() - 1);
+    EXPECT_THROW(locator.update_closest_points(q.after, feet, ModelLocator::HintedSearch::Local, wrong),
+                 std::invalid_argument);
+  }
 }
 
 TEST(ModelLocator, SignedDistanceIsPositiveOutsideASolid) {

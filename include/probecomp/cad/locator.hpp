@@ -11,6 +11,7 @@
 
 #include "probecomp/cad/model.hpp"
 #include "probecomp/nurbs/closest_point.hpp"
+#include "probecomp/nurbs/osculating_patch.hpp"
 
 namespace probecomp::cad {
 
@@ -81,9 +82,11 @@ class ModelLocator {
   [[nodiscard]] std::vector<ModelPoint> closest_points(std::span<const Point3> queries, std::span<const ModelPoint> hints,
                                                        HintedSearch search = HintedSearch::Exact) const;
   // The same in place: each foot, the hint on entry, is replaced by the query's closest point (no second array of
-  // a million feet, 96 MB, beside the first).
+  // a million feet, 96 MB, beside the first). `patches`, when given, receive each foot's osculating paraboloid where
+  // Newton from the hint found it (from Newton's own derivatives: no evaluation), else an invalid patch.
   void update_closest_points(std::span<const Point3> queries, std::span<ModelPoint> feet,
-                             HintedSearch search = HintedSearch::Exact) const;
+                             HintedSearch search = HintedSearch::Exact,
+                             std::span<nurbs::OsculatingPatch> patches = {}) const;
   // The closest point on any face but `excluded` that is nearer than `limit` (mm); face −1 when there is none. A
   // tip touching a second face (a concave corner) has one there within the noise of its first.
   [[nodiscard]] ModelPoint closest_point_on_other_faces(const Point3& query, int excluded, double limit) const;
@@ -101,6 +104,8 @@ class ModelLocator {
   // points nearer than `best`.
   void search(const Point3& query, ModelPoint& best, int searched) const;
   void visit_face(const Point3& query, int f, ModelPoint& best, const nurbs::ClosestPointResult* known = nullptr) const;
+  [[nodiscard]] ModelPoint closest_point(const Point3& query, const ModelPoint& hint, HintedSearch search,
+                                         nurbs::OsculatingPatch* patch) const;
   [[nodiscard]] ModelPoint make_point(const Point3& query, int f, const nurbs::ClosestPointResult& r, bool on_edge) const;
   struct Samples;
 

@@ -48,6 +48,11 @@ struct ClosestPointResult {
   // times the curvature's). Zero where unknown (a point found on a trim boundary): a caller that needs the normal
   // evaluates it.
   Vector3 Su = Vector3::Zero(), Sv = Vector3::Zero();
+  // The second derivatives where Newton last evaluated them (within its last step of 1e-6 mm at most of (u, v)): with
+  // the tangents, the surface's osculating paraboloid there at no further evaluation (osculating_patch.hpp). NaN where
+  // unknown (a closed form's or a boundary point's).
+  Vector3 Suu = Vector3::Constant(std::numeric_limits<double>::quiet_NaN());
+  Vector3 Suv = Suu, Svv = Suu;
   // How flat the distance is there (1 on a plane, falling towards 0 near a centre of curvature, where a second
   // minimum may lie close by), from Newton's last Hessian; NaN where not known (a global search's answer).
   double flatness = std::numeric_limits<double>::quiet_NaN();

@@ -13,7 +13,7 @@
 
 #include "probecomp/nurbs/surface.hpp"
 
-namespace probecomp::registration {
+namespace probecomp::nurbs {
 
 // 36 bytes, in floats: kept for every point while registering (a million points: 36 MB). Their 7 significant
 // digits carry a correction that is itself of the order of κ|t|², so they add no error that can be seen.
@@ -25,6 +25,7 @@ struct OsculatingPatch {
   // its sign from it). `offset` (mm) gives the patch of the surface moved that far along `normal` instead (a tip
   // larger than the model's). Invalid where the tangents are (nearly) parallel or a value is not finite.
   [[nodiscard]] static OsculatingPatch at(const nurbs::SurfaceD2& d, const Vector3& normal, double offset = 0.0);
+  [[nodiscard]] static OsculatingPatch invalid();
   [[nodiscard]] bool valid() const { return A[0] == A[0]; }  // NaN marks an invalid patch
 
   struct Prediction {
@@ -36,4 +37,4 @@ struct OsculatingPatch {
 };
 static_assert(sizeof(OsculatingPatch) == 36);
 
-}  // namespace probecomp::registration
+}  // namespace probecomp::nurbs

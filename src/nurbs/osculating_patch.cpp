@@ -1,10 +1,16 @@
-#include "probecomp/registration/osculating_patch.hpp"
+#include "probecomp/nurbs/osculating_patch.hpp"
 
 #include <Eigen/Dense>
 
 #include <limits>
 
-namespace probecomp::registration {
+namespace probecomp::nurbs {
+
+OsculatingPatch OsculatingPatch::invalid() {
+  OsculatingPatch patch;
+  patch.A[0] = std::numeric_limits<float>::quiet_NaN();
+  return patch;
+}
 
 OsculatingPatch OsculatingPatch::at(const nurbs::SurfaceD2& d, const Vector3& normal, double offset) {
   OsculatingPatch patch;
@@ -26,10 +32,7 @@ OsculatingPatch OsculatingPatch::at(const nurbs::SurfaceD2& d, const Vector3& no
   // to I₁₁ I₂₂, which vanishes with the tangent.
   const double det = I.determinant();
   const Eigen::Matrix<double, 2, 3> A = I.inverse() * J.transpose();
-  if (!(det > 1e-12 * I.trace() * I.trace()) || !A.allFinite() || !II.allFinite()) {
-    patch.A[0] = std::numeric_limits<float>::quiet_NaN();
-    return patch;
-  }
+  if (!(det > 1e-12 * I.trace() * I.trace()) || !A.allFinite() || !II.allFinite()) return invalid();
   for (int k = 0; k < 6; ++k) patch.A[k] = static_cast<float>(A(k / 3, k % 3));
   patch.II[0] = static_cast<float>(II(0, 0));
   patch.II[1] = static_cast<float>(0.5 * (II(0, 1) + II(1, 0)));
@@ -50,4 +53,4 @@ OsculatingPatch::Prediction OsculatingPatch::predict(const Point3& foot, const V
   return p;
 }
 
-}  // namespace probecomp::registration
+}  // namespace probecomp::nurbs

@@ -1,7 +1,7 @@
 // The osculating paraboloid against closed forms: distances, normals and feet of points near a sphere and a torus,
 // and of the spheres and tori a tip radius out from them.
 
-#include "probecomp/registration/osculating_patch.hpp"
+#include "probecomp/nurbs/osculating_patch.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 
 #include "probecomp/nurbs/constructors.hpp"
 
-namespace probecomp::registration {
+namespace probecomp::nurbs {
 namespace {
 
 struct Foot {
@@ -106,4 +106,4 @@ TEST(OsculatingPatch, AtAPoleWhereTheTangentsVanishItIsInvalid) {
 }
 
 }  // namespace
-}  // namespace probecomp::registration
+}  // namespace probecomp::nurbs
