@@ -392,34 +392,36 @@ CvRows cv_rows(const Surface& s, const Ordering& order, std::span<const Point3> 
   for (std::size_t k = 0; k < n_points; k += stride) {
     if (weights.empty() || weights[k] != 0.0) chosen.push_back(k);
   }
+  // Each row's place in span order, stably: a counting sort on its span's first unknown (the basis row's idx[0], as
+  // rational_basis finds the spans), then every row made in parallel at its place.
+  std::vector<int> key(chosen.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chosen.size(), 4096), [&](const auto& range) {
+    for (std::size_t r = range.begin(); r != range.end(); ++r) {
+      const SurfaceParameter& t = params[chosen[r]];
+      key[r] = order.index(s.U().find_span(t.u) - p, s.V().find_span(t.v) - q);
+    }
+  });
+  std::vector<std::size_t> place(static_cast<std::size_t>(order.nu) * static_cast<std::size_t>(order.nv) + 1, 0);
+  for (const int k : key) ++place[static_cast<std::size_t>(k) + 1];
+  std::partial_sum(place.begin(), place.end(), place.begin());
+  std::vector<std::size_t> to(chosen.size());
+  for (std::size_t r = 0; r < chosen.size(); ++r) to[r] = place[static_cast<std::size_t>(key[r])]++;
   const std::size_t m = static_cast<std::size_t>((p + 1) * (q + 1));
-  std::vector<int> idx(chosen.size() * m);
-  std::vector<double> R(chosen.size() * m);
-  std::vector<Vector3> y(chosen.size());
+  CvRows rows;
+  rows.m = static_cast<int>(m);
+  rows.idx.resize(chosen.size() * m);
+  rows.R.resize(chosen.size() * m);
+  rows.y.resize(chosen.size());
+  rows.w.resize(chosen.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chosen.size(), 1024), [&](const auto& range) {
     RationalBasis rb;
     for (std::size_t r = range.begin(); r != range.end(); ++r) {
-      const std::size_t k = chosen[r];
-      y[r] = points[k] - basis_row(s, order, params[k], rb, &idx[r * m]);
-      std::copy(rb.R, rb.R + m, &R[r * m]);
+      const std::size_t k = chosen[r], at = to[r];
+      rows.y[at] = points[k] - basis_row(s, order, params[k], rb, &rows.idx[at * m]);
+      std::copy(rb.R, rb.R + m, &rows.R[at * m]);
+      rows.w[at] = weights.empty() ? 1.0 : weights[k];
     }
   });
-  std::vector<std::size_t> by_span(chosen.size());
-  std::iota(by_span.begin(), by_span.end(), std::size_t{0});
-  std::stable_sort(by_span.begin(), by_span.end(), [&](std::size_t a, std::size_t b) { return idx[a * m] < idx[b * m]; });
-  CvRows rows;
-  rows.m = static_cast<int>(m);
-  rows.idx.resize(idx.size());
-  rows.R.resize(R.size());
-  rows.y.resize(chosen.size());
-  rows.w.resize(chosen.size());
-  for (std::size_t r = 0; r < chosen.size(); ++r) {
-    const std::size_t from = by_span[r];
-    std::copy_n(&idx[from * m], m, &rows.idx[r * m]);
-    std::copy_n(&R[from * m], m, &rows.R[r * m]);
-    rows.y[r] = y[from];
-    rows.w[r] = weights.empty() ? 1.0 : weights[chosen[from]];
-  }
   return rows;
 }
 
@@ -460,7 +462,9 @@ double leave_one_out_terms(const CvRows& rows, std::size_t first, std::size_t la
 // the points, and GCV, blind to it, would choose such a fit for exact data.
 double leave_one_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b) {
   const std::size_t n_rows = rows.y.size();
-  constexpr std::size_t kBlock = 4096;  // fixed blocks summed in order: the same sum for any thread count
+  // Fixed blocks summed in order: the same sum for any thread count; small enough that 10 000 rows share out over two
+  // cores (10 blocks, not 3).
+  constexpr std::size_t kBlock = 1024;
   const std::size_t blocks = (n_rows + kBlock - 1) / kBlock;
   std::vector<double> part(blocks, 0.0);
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) {

@@ -210,8 +210,8 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   std::vector<double> r(n), w(n);
   std::vector<char> use(n, 0);  // the point's correspondence enters the estimate (its weight may still be 0)
   std::vector<double> used_r;
-  // The surface about each target to second order, for the slides between searches; made at the first slide after a
-  // search (a search that confirms convergence needs none).
+  // The surface about each target to second order, for the slides between searches: from a local search's Newton,
+  // else made at the first slide after the search (a search that confirms convergence needs none).
   std::vector<OsculatingPatch> patches;
   bool patches_current = false;
   double scale = options.robust.min_scale;
@@ -334,8 +334,11 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
         const cad::Face& face = cad_model.faces[static_cast<std::size_t>(m.face)];
         const nurbs::Domain dom = face.surface.domain();
         const double u = m.u + p.du, v = m.v + p.dv;
-        // Strictly inside: a foot on the domain's edge is a constrained minimum, which the estimate does not use.
-        const bool inside = u > dom.u0 && u < dom.u1 && v > dom.v0 && v < dom.v1 && (!face.trimmed() || face.trim->contains(u, v));
+        // Strictly inside: a foot on the domain's edge is a constrained minimum, which the estimate does not use. A
+        // foot that crosses a closed face's seam is taken for one that left the face: the search after the slides
+        // finds it again (a search more, not a different answer).
+        const bool inside = u > dom.u0 && u < dom.u1 && v > dom.v0 && v < dom.v1 &&
+                            (!face.trimmed() || face.trim->contains(u, v));
         use[i] = x[i].allFinite() && inside && std::abs(p.distance) <= options.max_distance;
         r[i] = use[i] ? p.distance : 0.0;
       }
