@@ -1,6 +1,8 @@
 #include "probecomp/cad/material_side.hpp"
 
 #include <algorithm>
+#include <optional>
+#include <stdexcept>
 
 #include "probecomp/cad/locator.hpp"
 #include "probecomp/geometry/point_set.hpp"
@@ -28,9 +30,12 @@ const char* to_string(MaterialSource s) {
   return "?";
 }
 
-std::vector<MaterialSide> decide_material_side(Model& model, std::span<const Point3> raw_centres,
-                                               std::optional<std::span<const Vector3>> approach_normals,
-                                               const geometry::RigidTransform& initial) {
+namespace {
+
+// `given`: a locator of `model`, or null to make one when there is something to decide.
+std::vector<MaterialSide> decide(Model& model, const ModelLocator* given, std::span<const Point3> raw_centres,
+                                 std::optional<std::span<const Vector3>> approach_normals,
+                                 const geometry::RigidTransform& initial) {
   std::vector<MaterialSide> sides(model.faces.size());
   for (std::size_t f = 0; f < model.faces.size(); ++f) {
     sides[f].outward = model.faces[f].outward;
@@ -40,7 +45,9 @@ std::vector<MaterialSide> decide_material_side(Model& model, std::span<const Poi
   if (!any_unknown || raw_centres.empty()) return sides;
 
   const geometry::RigidTransform to_cad = initial.inverse();
-  const ModelLocator locator(model);
+  std::optional<ModelLocator> own;
+  if (given == nullptr) own.emplace(model);
+  const ModelLocator& locator = given != nullptr ? *given : *own;
   // Votes relative to the file's orientation (ModelPoint normals and distances use the current `outward`), of the
   // points at `indices` (all when empty).
   std::vector<int> plus, minus;
@@ -103,6 +110,22 @@ std::vector<MaterialSide> decide_material_side(Model& model, std::span<const Poi
     }
   }
   return sides;
+}
+
+}  // namespace
+
+std::vector<MaterialSide> decide_material_side(Model& model, std::span<const Point3> raw_centres,
+                                               std::optional<std::span<const Vector3>> approach_normals,
+                                               const geometry::RigidTransform& initial) {
+  return decide(model, nullptr, raw_centres, approach_normals, initial);
+}
+
+std::vector<MaterialSide> decide_material_side(Model& model, const ModelLocator& locator,
+                                               std::span<const Point3> raw_centres,
+                                               std::optional<std::span<const Vector3>> approach_normals,
+                                               const geometry::RigidTransform& initial) {
+  if (&locator.model() != &model) throw std::invalid_argument("decide_material_side: the locator is of another model");
+  return decide(model, &locator, raw_centres, approach_normals, initial);
 }
 
 }  // namespace probecomp::cad

@@ -330,10 +330,12 @@ PreparedModel prepare_model(const cad::Model& model, const geometry::TipRadii& r
   p.radii = radii;
   p.probe_radius = probe_radius;
   auto nominal = std::make_unique<cad::Model>(model);  // a copy: the material side is decided into its faces' `outward`
-  p.material = cad::decide_material_side(*nominal, raw, approach_normals, options.initial);
+  // One locator of the nominal model serves the material side's votes and everything after (it reads each face's
+  // `outward` as it answers, so the decision does not stale it).
+  p.nominal_locator = std::make_unique<cad::ModelLocator>(*nominal);
+  p.material = cad::decide_material_side(*nominal, *p.nominal_locator, raw, approach_normals, options.initial);
   auto offset = std::make_unique<cad::OffsetModel>(cad::offset_model(*nominal, probe_radius, options.offset));
   p.locator = std::make_unique<cad::ModelLocator>(offset->model);
-  p.nominal_locator = std::make_unique<cad::ModelLocator>(*nominal);
   p.offset = std::move(offset);
   p.nominal = std::move(nominal);
   p.seconds = clock.seconds();

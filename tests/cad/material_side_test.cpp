@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "probecomp/cad/locator.hpp"
 #include "registration/support.hpp"
 #include "support/test_surfaces.hpp"
 
@@ -39,6 +40,27 @@ TEST(MaterialSide, FromTheDataAndFromTheApproachNormals) {
   const std::vector<MaterialSide> sides = decide_material_side(solid, p.centres, std::nullopt, geometry::RigidTransform::Identity());
   EXPECT_EQ(sides[0].source, MaterialSource::Solid);
   EXPECT_EQ(solid.faces[0].outward, +1);
+}
+
+TEST(MaterialSide, AGivenLocatorDecidesAndThenAnswersWithTheDecidedSide) {
+  // The pipeline makes one locator of the nominal model for the vote and for everything after: the vote flips the
+  // face, and the same locator's normals and distances then follow the decided side.
+  const nurbs::Surface s = testing::random_rational_surface(22, {.nu = 8, .nv = 8, .height = 6.0});
+  const Probed p = probe(kMisalignment, s, 1.0, -1, 30);  // probed from the −(S_u × S_v) side
+  cad::Model m = single_face_model(s, +1, false);
+  const ModelLocator locator(m);
+  const ModelPoint before = locator.closest_point(p.centres[100]);
+  const std::vector<MaterialSide> sides =
+      decide_material_side(m, locator, p.centres, std::nullopt, geometry::RigidTransform::Identity());
+  EXPECT_EQ(sides[0].outward, -1);
+  EXPECT_EQ(sides[0].source, MaterialSource::Data);
+  const ModelPoint after = locator.closest_point(p.centres[100]);
+  EXPECT_LT(before.distance, 0.0);  // on the side the file called inside
+  EXPECT_NEAR(after.distance, -before.distance, 1e-12);
+  EXPECT_LT((after.normal + before.normal).norm(), 1e-12);
+  cad::Model other = single_face_model(s, +1, false);
+  EXPECT_THROW((void)decide_material_side(other, locator, p.centres, std::nullopt, geometry::RigidTransform::Identity()),
+               std::invalid_argument);
 }
 
 TEST(MaterialSide, ManyPointsVoteByASubsetUnlessAFaceHasTooFewVotesThere) {

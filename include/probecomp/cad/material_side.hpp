@@ -12,6 +12,8 @@
 
 namespace probecomp::cad {
 
+class ModelLocator;
+
 enum class MaterialSource {
   Solid,            // the face bounds a closed solid in the file
   ApproachNormals,  // the approach normals of the points on the face point to one side
@@ -34,6 +36,12 @@ struct MaterialSide {
 // from which side the raw centres lie on, after the initial transform (CAD to machine); updates
 // model.faces[k].outward and returns what was decided per face. Faces from solids are kept as they are.
 [[nodiscard]] std::vector<MaterialSide> decide_material_side(Model& model, std::span<const Point3> raw_centres,
+                                                             std::optional<std::span<const Vector3>> approach_normals,
+                                                             const geometry::RigidTransform& initial);
+// The same with a locator of `model` made already (the caller keeps it: a locator reads `outward` at each query, so
+// it serves after the decision too). Throws std::invalid_argument for a locator of another model.
+[[nodiscard]] std::vector<MaterialSide> decide_material_side(Model& model, const ModelLocator& locator,
+                                                             std::span<const Point3> raw_centres,
                                                              std::optional<std::span<const Vector3>> approach_normals,
                                                              const geometry::RigidTransform& initial);
 
