@@ -32,7 +32,12 @@ OsculatingPatch OsculatingPatch::at(const nurbs::SurfaceD2& d, const Vector3& no
   // to I₁₁ I₂₂, which vanishes with the tangent.
   const double det = I.determinant();
   const Eigen::Matrix<double, 2, 3> A = I.inverse() * J.transpose();
-  if (!(det > 1e-12 * I.trace() * I.trace()) || !A.allFinite() || !II.allFinite()) return invalid();
+  // Floats hold the patch: a value beyond their range (a parametrisation scaled absurdly) makes it invalid too.
+  constexpr double kFloatRange = std::numeric_limits<float>::max();
+  if (!(det > 1e-12 * I.trace() * I.trace()) || !(A.cwiseAbs().maxCoeff() < kFloatRange) ||
+      !(II.cwiseAbs().maxCoeff() < kFloatRange)) {
+    return invalid();
+  }
   for (int k = 0; k < 6; ++k) patch.A[k] = static_cast<float>(A(k / 3, k % 3));
   patch.II[0] = static_cast<float>(II(0, 0));
   patch.II[1] = static_cast<float>(0.5 * (II(0, 1) + II(1, 0)));

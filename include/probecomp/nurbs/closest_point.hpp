@@ -48,9 +48,9 @@ struct ClosestPointResult {
   // times the curvature's). Zero where unknown (a point found on a trim boundary): a caller that needs the normal
   // evaluates it.
   Vector3 Su = Vector3::Zero(), Sv = Vector3::Zero();
-  // The second derivatives where Newton last evaluated them (within its last step of 1e-6 mm at most of (u, v)): with
-  // the tangents, the surface's osculating paraboloid there at no further evaluation (osculating_patch.hpp). NaN where
-  // unknown (a closed form's or a boundary point's).
+  // The second derivatives where Newton last evaluated them: at (u, v), or its last step (under 1e-6 mm) before it.
+  // With the tangents they give the surface's osculating paraboloid there without another evaluation
+  // (osculating_patch.hpp). NaN where unknown (a closed form's answer, a point on a trim boundary).
   Vector3 Suu = Vector3::Constant(std::numeric_limits<double>::quiet_NaN());
   Vector3 Suv = Suu, Svv = Suu;
   // How flat the distance is there (1 on a plane, falling towards 0 near a centre of curvature, where a second
