@@ -406,8 +406,8 @@ ModelPoint ModelLocator::closest_point(const Point3& query, const ModelPoint& hi
   search(query, best, hint.face);
   // The patch from Newton's own derivatives when its foot stood.
   if (patch != nullptr && best.face == hint.face && best.u == local.u && best.v == local.v && local.Suu.allFinite()) {
-    *patch = nurbs::OsculatingPatch::at(nurbs::SurfaceD2{local.point, local.Su, local.Sv, local.Suu, local.Suv, local.Svv},
-                                        best.normal);
+    const nurbs::SurfaceD2 d{local.point, local.Su, local.Sv, local.Suu, local.Suv, local.Svv};
+    *patch = nurbs::OsculatingPatch::at(d, best.normal);
   }
   return best;
 }

@@ -85,8 +85,9 @@ Loaded load(const std::string& cad_path, const std::string& points_path, std::op
   if (!initial_transform.empty()) l.initial = io::read_transform(initial_transform);
   std::optional<io::LengthUnit> declared;
   if (!units.empty()) declared = io::length_unit(units);
-  // The points and the model are read side by side (10 000 points: 4 ms and 3 ms). Each read's error is kept and
-  // the points' is reported first, as when they were read one after the other, whichever thread failed first.
+  // The points and the model are read side by side (10 000 points: 4 ms and 3 ms). Each read's error is kept, and
+  // the points' errors (their reading, then their tip radii) are reported before the model's, as when they were
+  // read one after the other, whichever thread failed first.
   std::exception_ptr points_error, model_error;
   tbb::parallel_invoke(
       [&] {
@@ -105,11 +106,11 @@ Loaded load(const std::string& cad_path, const std::string& points_path, std::op
         }
       });
   if (points_error) std::rethrow_exception(points_error);
-  if (model_error) std::rethrow_exception(model_error);
   bar.set_points(l.table.points.size());
   std::optional<double> default_mm;
   if (r) default_mm = *r * l.table.unit.mm;
-  l.radii = tip_radii(l.table, default_mm, points_path);
+  l.radii = tip_radii(l.table, default_mm, points_path);  // its errors, too, before the model's
+  if (model_error) std::rethrow_exception(model_error);
   l.inputs = {.cad = cad_path, .points = points_path, .points_unit = l.table.unit, .probe_radius = default_mm};
   if (l.radii.empty()) {
     l.inputs.tip_radii = {*default_mm};

@@ -425,8 +425,8 @@ CvRows cv_rows(const Surface& s, const Ordering& order, std::span<const Point3> 
   return rows;
 }
 
-// The leave-one-out terms of rows [first, last), in order (see leave_one_out); M is the row length m when fixed at compile time
-// (Eigen::Dynamic otherwise), so that a bicubic row's products stay in vector registers, as in
+// The leave-one-out terms of rows [first, last), in order (see leave_one_out); M is the row length m when fixed at
+// compile time (Eigen::Dynamic otherwise), so that a bicubic row's products stay in vector registers, as in
 // block_quadratic_form (the 10 000-point case's 17 trials: 22.8 ms a point at a time from the band, 8.5 ms so).
 template <int M>
 double leave_one_out_terms(const CvRows& rows, std::size_t first, std::size_t last, const std::vector<double>& D,

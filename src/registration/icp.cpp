@@ -175,11 +175,12 @@ Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::Mod
   return step;
 }
 
-// f(first, last) over consecutive blocks of [0, n), in parallel: for the per-point passes of each step, which
-// write only their own points' entries.
-// `grain`: the fewest points a block holds; smaller for passes that evaluate the surface or a patch (tens to hundreds
-// of ns a point: 10 000 points in one block would leave a core idle).
+// The fewest points a block holds in passes that evaluate the surface or a patch (tens to hundreds of ns a point:
+// 10 000 points in one block of the default grain would leave a core idle).
 constexpr std::size_t kEvaluatingGrain = 1024;
+
+// f(first, last) over consecutive blocks of at least `grain` points of [0, n), in parallel: for the per-point passes
+// of each step, which write only their own points' entries.
 template <class F>
 void for_blocks(std::size_t n, F&& f, std::size_t grain = 1 << 14) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),

@@ -22,4 +22,9 @@ expect_error "no points" "$W/out.csv" "$P" project --cad "$CAD/asitus_wavy-cube.
 expect_error "truncated" "$W/out.csv" "$P" project --cad "$W/truncated.stp" --points "$W/good.csv" --output "$W/out.csv"
 expect_error "does not exist" "$W/plan.csv" "$P" plan "$CAD/asitus_wavy-cube.stp" --spacing 0.1 --faces 99 --output "$W/plan.csv"
 expect_error "spacing" "$W/plan.csv" "$P" plan "$CAD/asitus_wavy-cube.stp" --spacing -1 --output "$W/plan.csv"
+# compensate reads the points and the model side by side; the points' errors (a bad row, a missing tip radius) still
+# come before the model's, as when they were read one after the other.
+printf 'x,y,z,r\n1,2,3,1\n4,5,6,\n' >"$W/no_radius.csv"
+expect_error "no_radius.csv:3" "$W/out.csv" "$P" compensate --cad "$W/missing.stp" --points "$W/no_radius.csv" --output "$W/out.csv"
+expect_error "bad_number.csv:3" "$W/out.csv" "$P" compensate --cad "$W/missing.stp" --points "$W/bad_number.csv" --probe-radius 1 --output "$W/out.csv"
 exit $fail

@@ -23,15 +23,16 @@ struct OsculatingPatch {
 
   // The patch of the surface with derivatives `d` at the foot, `normal` the unit normal there (either side: II takes
   // its sign from it). `offset` (mm) gives the patch of the surface moved that far along `normal` instead (a tip
-  // larger than the model's). Invalid where the tangents are (nearly) parallel or a value is not finite.
+  // larger than the model's). Invalid where a tangent vanishes (a pole) or the two are (nearly) parallel, or a value
+  // is not finite or would not fit a float.
   [[nodiscard]] static OsculatingPatch at(const nurbs::SurfaceD2& d, const Vector3& normal, double offset = 0.0);
   [[nodiscard]] static OsculatingPatch invalid();
   [[nodiscard]] bool valid() const { return A[0] == A[0]; }  // NaN marks an invalid patch
 
   struct Prediction {
-    double distance = 0.0;           // signed, + on the side `normal` points to, mm
+    double distance = 0.0;               // signed, + on the side `normal` points to, mm
     Vector3 gradient = Vector3::Zero();  // of the distance at x: the normal at x's foot, to first order
-    double du = 0.0, dv = 0.0;       // from the foot's parameters to x's foot's
+    double du = 0.0, dv = 0.0;           // from the foot's parameters to x's foot's
   };
   [[nodiscard]] Prediction predict(const Point3& foot, const Vector3& normal, const Point3& x) const;
 };
