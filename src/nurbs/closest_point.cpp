@@ -49,6 +49,7 @@ struct Iterate {
   SurfaceD2 d;
   Vector3 r;  // S − P
   double f;   // |S − P|²
+  bool approximate = false;  // the derivatives are stored ones, rounded to floats (S is exact): good for a step only
 };
 
 // Near the minimum f is flat: a tangential move of 1e-8 mm changes f by about 1e-16 mm², below its rounding.
@@ -123,11 +124,20 @@ std::array<double, 2> newton_step(const Hessian& h, double gu, double gv, Active
 }
 
 // Projected Newton inside `dom`; `spans` are the knot spans of `dom` when it lies in one (a cell), else -1.
-// `flat`, if given, receives flatness() at the last iterate.
+// `flat`, if given, receives flatness() at the last iterate. `start`, if given, is the surface at (u0, v0), inside
+// `dom`, with its derivatives rounded to floats (a seed cell's centre): the first step is taken from it without an
+// evaluation. Rounded derivatives make that step slightly other than Newton's, which the steps after it correct.
 ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, double v0, const Domain& dom,
-                             int max_iterations, KnotSpans spans, double* flat = nullptr) {
+                             int max_iterations, KnotSpans spans, double* flat = nullptr,
+                             const SurfaceD2* start = nullptr) {
   ClosestPointResult result;
-  Iterate it = make_iterate(s, P, std::clamp(u0, dom.u0, dom.u1), std::clamp(v0, dom.v0, dom.v1), spans);
+  Iterate it;
+  if (start != nullptr) {
+    it = {u0, v0, *start, start->S - P, 0.0, true};
+    it.f = it.r.squaredNorm();
+  } else {
+    it = make_iterate(s, P, std::clamp(u0, dom.u0, dom.u1), std::clamp(v0, dom.v0, dom.v1), spans);
+  }
 
   // The Hessian of the last Newton step, for flatness() at the end: one step before the final iterate at most,
   // which is close enough for a test of whether the distance is flat there.
@@ -138,6 +148,10 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
     if (flat != nullptr) *flat = result.flatness;
   };
   auto finish = [&](ClosestPointStatus status) {
+    if (it.approximate) {
+      it = make_iterate(s, P, it.u, it.v, spans);
+      have_h = false;
+    }
     report_flatness();
     result.status = status;
     result.u = it.u;
@@ -178,7 +192,8 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
         predicted < kClosestPointStepTolerance ||
         (previous_step > 0.0 && predicted <= kMaxPredictedLastStep &&
          predicted * predicted * predicted <= kPredictedErrorFraction * kClosestPointStepTolerance * previous_step * previous_step);
-    if (next_below_tolerance && it.d.Suu.allFinite() && it.d.Suv.allFinite() && it.d.Svv.allFinite()) {
+    if (next_below_tolerance && !it.approximate && it.d.Suu.allFinite() && it.d.Suv.allFinite() &&
+        it.d.Svv.allFinite()) {
       // The last, tiny step is taken without the derivatives it would need only to start another: Newton's
       // error after it is of the order of its square. The point where the step lands is the Taylor polynomial of
       // second order from the derivatives at hand: its error is of the third order in a step under 1e-8 mm (times
@@ -221,7 +236,7 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
     }
     const double step = ((next.u - it.u) * it.d.Su + (next.v - it.v) * it.d.Sv).norm();
     // Only a full, unclamped step tells the rate of convergence.
-    const bool full = halving == 0 && next.u == it.u + du && next.v == it.v + dv;
+    const bool full = halving == 0 && next.u == it.u + du && next.v == it.v + dv && !it.approximate;
     previous_step = full ? step : 0.0;
     it = next;
     if (step < kClosestPointStepTolerance) {
@@ -284,50 +299,93 @@ struct CellAxis {
   }
 };
 
+// The largest float not above x (float_below) and the smallest not below it (float_above): a box stored in floats
+// rounded so only grows. Infinities and NaN stay what they are; a finite x beyond the float range gives the largest
+// float or an infinity, on the right side.
+float float_below(double x) {
+  constexpr double top = std::numeric_limits<float>::max();
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  if (std::isnan(x) || std::isinf(x)) return static_cast<float>(x);
+  if (x > top) return std::numeric_limits<float>::max();
+  if (x < -top) return -inf;
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -inf) : f;
+}
+float float_above(double x) { return -float_below(-x); }
+
 // Each cell is bounded by an oriented box in the frame of its seed c: tangent t1 (along S_u), t2 = n × t1,
 // normal n. The box encloses the cell's Bézier control points (the surface refined so that every cell is a
 // Bézier patch, A5.4); with positive weights a rational patch lies in the convex hull of its control points,
 // so the box contains the cell and the distance from a query to the box is a rigorous lower bound. The box
 // tightens quadratically in the normal direction as cells shrink. The floor absorbs rounding.
 constexpr double kCellBoundFloor = 1e-9;  // mm
+// The box is kept in floats, one cache line a cell (in doubles it took two and a half; a search reads the boxes
+// of the cells near the query in random order). Its frame, rounded to floats, is orthonormal to about 1e-7, and
+// the extents are taken along the rounded frame and rounded outwards, so they hold the cell exactly. The bounds
+// below then allow for the frame's stretch (its norm is at most 1 + 4e-7) with a slack a few times larger.
+constexpr double kFrameSlack = 1e-6;
 
-struct CellBox {
-  Vector3 t1, t2, n;
-  Eigen::Array3d lo, hi;  // box extent along (t1, t2, n), relative to the seed
+struct alignas(64) CellBox {
+  float t1[3] = {1, 0, 0}, t2[3] = {0, 1, 0}, n[3] = {0, 0, 1};
+  float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};  // box extent along (t1, t2, n), relative to the seed
+  // tan of the half-angle of the cell's normal cone about n, rounded up with the slack; infinite where a minimum
+  // need not be a critical point (cells on the domain's edges or on a C0 knot line) or no cone below 90° exists.
+  float cone_tan = std::numeric_limits<float>::infinity();
+
+  static Vector3 vec(const float (&a)[3]) { return {a[0], a[1], a[2]}; }
+  void set_frame(const Vector3& T1, const Vector3& T2, const Vector3& N) {
+    for (int x = 0; x < 3; ++x) {
+      t1[x] = static_cast<float>(T1[x]);
+      t2[x] = static_cast<float>(T2[x]);
+      n[x] = static_cast<float>(N[x]);
+    }
+  }
+  // The rounded normal, of unit length: the axis of the cell's normal cone.
+  [[nodiscard]] Vector3 axis() const { return vec(n).normalized(); }
+  void set_cone(double tan_half_angle) {
+    // An angle a slack wider (tan(θ + δ) ≤ (tan θ + 2δ) / (1 − 2δ tan θ) for small δ), then the frame's stretch.
+    const double denominator = 1.0 - 2.0 * kFrameSlack * tan_half_angle;
+    cone_tan = denominator > 0.5
+                   ? float_above((tan_half_angle + 2.0 * kFrameSlack) / denominator * (1.0 + kFrameSlack) + kFrameSlack)
+                   : std::numeric_limits<float>::infinity();
+  }
+
+  [[nodiscard]] Eigen::Array3d coordinates(const Vector3& e) const { return {e.dot(vec(t1)), e.dot(vec(t2)), e.dot(vec(n))}; }
 
   // The box of the Cartesian points of a Bézier net (row-major, (p+1)·(q+1) homogeneous points) in this frame.
   void enclose(const Point3& origin, std::span<const HomogeneousPoint> net) {
-    lo = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
-    hi = -lo;
+    Eigen::Array3d low = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
     for (const HomogeneousPoint& P : net) {
-      const Vector3 e = P.head<3>() / P.w() - origin;
-      const Eigen::Array3d x(e.dot(t1), e.dot(t2), e.dot(n));
-      lo = lo.min(x);
-      hi = hi.max(x);
+      const Eigen::Array3d x = coordinates(P.head<3>() / P.w() - origin);
+      low = low.min(x);
+      high = high.max(x);
     }
-    lo -= kCellBoundFloor;
-    hi += kCellBoundFloor;
+    for (int x = 0; x < 3; ++x) {
+      lo[x] = float_below(low[x] - kCellBoundFloor);
+      hi[x] = float_above(high[x] + kCellBoundFloor);
+    }
   }
 
   [[nodiscard]] double lower_bound(const Vector3& q_minus_c) const {
-    const Eigen::Array3d x(q_minus_c.dot(t1), q_minus_c.dot(t2), q_minus_c.dot(n));
-    const Eigen::Array3d gap = (lo - x).max(x - hi).max(0.0);
-    return std::sqrt(gap.square().sum());
+    const Eigen::Array3d x = coordinates(q_minus_c);
+    const Eigen::Array3d gap = (Eigen::Array3d(lo[0], lo[1], lo[2]) - x).max(x - Eigen::Array3d(hi[0], hi[1], hi[2])).max(0.0);
+    return std::sqrt(gap.square().sum()) / (1.0 + kFrameSlack);
   }
 
   // Whether the cell can hold a critical point of the distance (q − x parallel to the normal at x), given that
   // every normal of the cell is within the angle atan(cone_tan) of n: at such a point the component of q − x
   // across n is at most cone_tan times its component along n, and over the box the first is at least the
   // tangential gap, the second at most the farther of the box's two faces.
-  [[nodiscard]] bool may_hold_critical_point(const Vector3& q_minus_c, double cone_tan) const {
-    if (!(cone_tan < std::numeric_limits<double>::infinity())) return true;
-    const double x1 = q_minus_c.dot(t1), x2 = q_minus_c.dot(t2), x3 = q_minus_c.dot(n);
-    const double g1 = std::max({lo[0] - x1, x1 - hi[0], 0.0});
-    const double g2 = std::max({lo[1] - x2, x2 - hi[1], 0.0});
-    const double height = std::max(std::abs(x3 - lo[2]), std::abs(x3 - hi[2]));
+  [[nodiscard]] bool may_hold_critical_point(const Vector3& q_minus_c) const {
+    if (!(cone_tan < std::numeric_limits<float>::infinity())) return true;
+    const Eigen::Array3d x = coordinates(q_minus_c);
+    const double g1 = std::max({lo[0] - x[0], x[0] - hi[0], 0.0});
+    const double g2 = std::max({lo[1] - x[1], x[1] - hi[1], 0.0});
+    const double height = std::max(std::abs(x[2] - lo[2]), std::abs(x[2] - hi[2]));
     return std::sqrt(g1 * g1 + g2 * g2) <= cone_tan * height + kCellBoundFloor;
   }
 };
+static_assert(sizeof(CellBox) == 64);
 
 // A Bézier patch in homogeneous form: (p+1)·(q+1) points, row i (u) major, over the parameter box `box`.
 struct BezierPatch {
@@ -347,50 +405,82 @@ struct ClosestPointSolver::Seeds {
   explicit Seeds(Surface refined) : bezier(std::move(refined)) {}
   CellAxis axis_u, axis_v;
   Surface bezier;  // the surface refined so that knot span (i, j) has control points i·p .. i·p+p by j·q .. j·q+q
-  std::vector<Point3> seed;         // the surface at each cell's centre
-  std::vector<double> u, v;          // the cell's centre
+  // What the gathering pass reads of each cell, in half a cache line.
+  struct Cell {
+    Point3 seed;        // the surface at the cell's centre
+    float reach = 0.0;  // no point of the cell is farther from the seed (its control points' farthest, rounded up)
+    std::uint8_t in_region = 1;  // the cell meets the region (all cells without one)
+    std::uint8_t on_face = 1;    // the seed lies in the region (all seeds without one): a point of the face
+  };
+  std::vector<Cell> cell;
+  // The derivatives at each cell's centre, in floats: Newton's first step from the centre, taken without evaluating
+  // the surface there (one evaluation of about four fewer a search). One cache line.
+  struct alignas(64) Start {
+    float d[5][3];  // S_u, S_v, S_uu, S_uv, S_vv
+    bool usable = false;  // every value finite and within the float range
+    [[nodiscard]] SurfaceD2 at(const Point3& S) const {
+      auto vec = [&](int k) { return Vector3(d[k][0], d[k][1], d[k][2]); };
+      return {S, vec(0), vec(1), vec(2), vec(3), vec(4)};
+    }
+  };
+  std::vector<Start> start;
+  std::vector<double> u, v;  // the cell's centre
   std::vector<CellBox> box;
-  // tan of the half-angle of the cell's normal cone about box.n; infinite where a minimum need not be a
-  // critical point (cells on the domain's edges or on a C0 knot line) or no cone below 90° exists.
-  std::vector<double> cone_tan;
-  std::vector<char> in_region;  // the cell meets the region (all cells without one)
   // A bounding-volume hierarchy over the cells, built on the parameter grid: halving the longer of the two index
-  // ranges keeps every node a compact piece of the surface. Node 0 is the root; a leaf holds a block of up to 2 × 2
-  // cells (two levels fewer to walk than one cell a leaf: 12–20 % faster queries on the panel benchmark).
-  struct Node {
-    Eigen::Array3d lo, hi;  // axis-aligned box holding the node's cells (their control points)
-    int left = -1, right = -1;  // children, or -1 for a leaf
-    std::uint32_t cell = 0;     // a leaf's first cell (lowest u and v)
-    std::uint8_t cells_u = 1, cells_v = 1;  // a leaf's block of cells
-    bool in_region = true;      // some cell of the node meets the region
+  // ranges keeps every node a compact piece of the surface. A leaf is a block of up to 2 × 2 cells (two levels fewer
+  // to walk than one cell a leaf: 12–20 % faster queries on the panel benchmark). An inner node holds its two
+  // children's axis-aligned boxes, in floats rounded outwards (a box only grows, so its distance stays a lower
+  // bound): a step down the tree reads one cache line, where a node holding its own box in doubles took three (the
+  // node and both children). Queries in random order miss the cache at nearly every step.
+  struct alignas(64) Node {
+    float lo[2][3], hi[2][3];  // the children's boxes: empty (lo = +inf) where no cell of the child meets the region
+    std::int64_t child[2];     // an inner node's index, or a leaf's cells as leaf_ref() encodes them
   };
   std::vector<Node> nodes;
-  std::vector<char> seed_on_face;  // the seed lies in the region (all seeds without one): a point of the face
+  std::int64_t root = 0;            // as Node::child
+  Eigen::Array3d root_lo, root_hi;  // the root's box
+  bool root_meets_region = true;
 
+  // A leaf as a negative reference: its first cell (lowest u and v) and its block of cells_u × cells_v ≤ 2 × 2.
+  static std::int64_t leaf_ref(std::size_t cell, int cells_u, int cells_v) {
+    return -1 - static_cast<std::int64_t>(4 * cell + 2 * static_cast<std::size_t>(cells_u - 1) +
+                                          static_cast<std::size_t>(cells_v - 1));
+  }
+  struct Leaf {
+    std::uint32_t cell;
+    int cells_u, cells_v;
+  };
+  static Leaf leaf(std::int64_t ref) {
+    const std::uint64_t x = static_cast<std::uint64_t>(-1 - ref);
+    return {static_cast<std::uint32_t>(x / 4), static_cast<int>((x / 2) % 2) + 1, static_cast<int>(x % 2) + 1};
+  }
+
+  struct Built {
+    std::int64_t ref;
+    Eigen::Array3d lo, hi;  // empty where no cell meets the region
+  };
   // The hierarchy over cells [i0, i1) × [j0, j1); `leaf_lo`, `leaf_hi`: each cell's axis-aligned box.
-  int build(int i0, int i1, int j0, int j1, const std::vector<Eigen::Array3d>& leaf_lo,
-            const std::vector<Eigen::Array3d>& leaf_hi) {
-    const int at = static_cast<int>(nodes.size());
-    nodes.emplace_back();
+  Built build(int i0, int i1, int j0, int j1, const std::vector<Eigen::Array3d>& leaf_lo,
+              const std::vector<Eigen::Array3d>& leaf_hi) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
     if (i1 - i0 <= 2 && j1 - j0 <= 2) {
-      Node& leaf = nodes[at];
-      leaf.lo = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
-      leaf.hi = -leaf.lo;
-      leaf.in_region = false;
       const std::size_t nv = static_cast<std::size_t>(axis_v.count());
+      Built leaf{leaf_ref(static_cast<std::size_t>(i0) * nv + static_cast<std::size_t>(j0), i1 - i0, j1 - j0),
+                 Eigen::Array3d::Constant(inf), Eigen::Array3d::Constant(-inf)};
+      bool meets = false;
       for (int i = i0; i < i1; ++i)
         for (int j = j0; j < j1; ++j) {
           const std::size_t k = static_cast<std::size_t>(i) * nv + static_cast<std::size_t>(j);
           leaf.lo = leaf.lo.min(leaf_lo[k]);
           leaf.hi = leaf.hi.max(leaf_hi[k]);
-          leaf.in_region = leaf.in_region || in_region[k] != 0;
+          meets = meets || cell[k].in_region != 0;
         }
-      leaf.cell = static_cast<std::uint32_t>(static_cast<std::size_t>(i0) * nv + static_cast<std::size_t>(j0));
-      leaf.cells_u = static_cast<std::uint8_t>(i1 - i0);
-      leaf.cells_v = static_cast<std::uint8_t>(j1 - j0);
-      return at;
+      if (!meets) leaf.lo = Eigen::Array3d::Constant(inf), leaf.hi = Eigen::Array3d::Constant(-inf);
+      return leaf;
     }
-    int l, r;
+    const std::size_t at = nodes.size();
+    nodes.emplace_back();
+    Built l, r;
     if (i1 - i0 >= j1 - j0) {
       const int mid = (i0 + i1) / 2;
       l = build(i0, mid, j0, j1, leaf_lo, leaf_hi);
@@ -401,12 +491,15 @@ struct ClosestPointSolver::Seeds {
       r = build(i0, i1, mid, j1, leaf_lo, leaf_hi);
     }
     Node& node = nodes[at];
-    node.left = l;
-    node.right = r;
-    node.lo = nodes[l].lo.min(nodes[r].lo);
-    node.hi = nodes[l].hi.max(nodes[r].hi);
-    node.in_region = nodes[l].in_region || nodes[r].in_region;
-    return at;
+    for (int c = 0; c < 2; ++c) {
+      const Built& b = c == 0 ? l : r;
+      node.child[c] = b.ref;
+      for (int x = 0; x < 3; ++x) {
+        node.lo[c][x] = float_below(b.lo[x]);
+        node.hi[c][x] = float_above(b.hi[x]);
+      }
+    }
+    return {static_cast<std::int64_t>(at), l.lo.min(r.lo), l.hi.max(r.hi)};
   }
 };
 
@@ -528,12 +621,12 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
   const int nv = sd.axis_v.count();
 
   const std::size_t n = static_cast<std::size_t>(nu) * nv;
-  sd.seed.resize(n);
+  sd.cell.resize(n);
+  sd.start.resize(n);
   std::vector<Eigen::Array3d> aabb_lo(n), aabb_hi(n);  // each cell's control points' axis-aligned box
   sd.u.resize(n);
   sd.v.resize(n);
   sd.box.resize(n);
-  sd.in_region.assign(n, 1);
 
   // A minimum on the domain's edge or on a knot line where the surface is only C0 (multiplicity ≥ degree) need
   // not be a critical point: cells touching one are never culled by their normal cone.
@@ -546,36 +639,42 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
       const std::size_t k = static_cast<std::size_t>(i) * nv + j;
       sd.u[k] = 0.5 * (sd.axis_u.lower(i) + sd.axis_u.upper(i));
       sd.v[k] = 0.5 * (sd.axis_v.lower(j) + sd.axis_v.upper(j));
-      const SurfaceD1 d = derivatives_d1(surface_, sd.u[k], sd.v[k]);
+      const SurfaceD2 d = derivatives_d2(surface_, sd.u[k], sd.v[k]);
+      const Vector3* dk[5] = {&d.Su, &d.Sv, &d.Suu, &d.Suv, &d.Svv};
+      sd.start[k].usable = true;
+      for (int a = 0; a < 5; ++a)
+        for (int x = 0; x < 3; ++x) {
+          const double value = (*dk[a])[x];
+          sd.start[k].usable = sd.start[k].usable && std::abs(value) < std::numeric_limits<float>::max();
+          sd.start[k].d[a][x] = sd.start[k].usable ? static_cast<float>(value) : 0.0f;
+        }
       const UnitNormal un = unit_normal(surface_, sd.u[k], sd.v[k], d.Su, d.Sv);
       CellBox& box = sd.box[k];
       // Any orthonormal frame gives a valid bound; the tangent frame gives a thin box.
       if (un.status != UnitNormal::Status::Degenerate && d.Su.norm() > 0.0) {
-        box.n = un.n;
-        box.t1 = (d.Su - d.Su.dot(un.n) * un.n).normalized();
-        box.t2 = box.n.cross(box.t1);
-      } else {
-        box.t1 = Vector3::UnitX();
-        box.t2 = Vector3::UnitY();
-        box.n = Vector3::UnitZ();
+        const Vector3 t1 = (d.Su - d.Su.dot(un.n) * un.n).normalized();
+        box.set_frame(t1, un.n.cross(t1), un.n);
       }
       const BezierPatch patch = cell_patch(sd.bezier, sd.axis_u, sd.axis_v, i, j);
       box.enclose(d.S, patch.net);
       aabb_lo[k] = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
       aabb_hi[k] = -aabb_lo[k];
+      double reach = 0.0;
       for (const HomogeneousPoint& P : patch.net) {
-        const Eigen::Array3d x = (P.head<3>() / P.w()).array();
-        aabb_lo[k] = aabb_lo[k].min(x);
-        aabb_hi[k] = aabb_hi[k].max(x);
+        const Point3 x = P.head<3>() / P.w();
+        aabb_lo[k] = aabb_lo[k].min(x.array());
+        aabb_hi[k] = aabb_hi[k].max(x.array());
+        reach = std::max(reach, (x - d.S).norm());
       }
       aabb_lo[k] -= kCellBoundFloor;
       aabb_hi[k] += kCellBoundFloor;
-      if (region_ != nullptr) sd.in_region[k] = region_->meets(patch.box) ? 1 : 0;
-      sd.seed[k] = d.S;
+      Seeds::Cell& c = sd.cell[k];
+      c.seed = d.S;
+      c.reach = float_above(reach + kCellBoundFloor);
+      if (region_ != nullptr) c.in_region = region_->meets(patch.box) ? 1 : 0;
     }
   });
   // Normal cones: each knot span's normal polynomial (normal_cone.hpp) cut into its cells, about each cell's frame.
-  sd.cone_tan.assign(n, std::numeric_limits<double>::infinity());
   tbb::parallel_for(0, spans_u * spans_v, [&](int span) {
     const int su = span / spans_v, sv = span % spans_v;
     std::vector<HomogeneousPoint> net;
@@ -591,16 +690,19 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
         const int j = first_v + b;
         if (edge_or_crease(sd.axis_v, surface_.V(), j)) continue;
         const std::size_t k = static_cast<std::size_t>(i) * nv + j;
-        const double c = normal_cone_cosine(cells[static_cast<std::size_t>(b)], sd.box[k].n);
-        if (c > 0.0) sd.cone_tan[k] = std::sqrt(std::max(0.0, 1.0 - c * c)) / c;
+        const double c = normal_cone_cosine(cells[static_cast<std::size_t>(b)], sd.box[k].axis());
+        if (c > 0.0) sd.box[k].set_cone(std::sqrt(std::max(0.0, 1.0 - c * c)) / c);
       }
     }
   });
-  sd.nodes.reserve(2 * n);
-  sd.build(0, nu, 0, nv, aabb_lo, aabb_hi);
-  sd.seed_on_face.assign(n, 1);
+  sd.nodes.reserve(n / 2 + 1);
+  const Seeds::Built root = sd.build(0, nu, 0, nv, aabb_lo, aabb_hi);
+  sd.root = root.ref;
+  sd.root_lo = root.lo;
+  sd.root_hi = root.hi;
+  sd.root_meets_region = std::any_of(sd.cell.begin(), sd.cell.end(), [](const Seeds::Cell& c) { return c.in_region != 0; });
   if (region_ != nullptr) {
-    for (std::size_t k = 0; k < n; ++k) sd.seed_on_face[k] = sd.in_region[k] && region_->contains(sd.u[k], sd.v[k]) ? 1 : 0;
+    for (std::size_t k = 0; k < n; ++k) sd.cell[k].on_face = sd.cell[k].in_region && region_->contains(sd.u[k], sd.v[k]) ? 1 : 0;
   }
 }
 
@@ -608,13 +710,13 @@ ClosestPointSolver::~ClosestPointSolver() = default;
 ClosestPointSolver::ClosestPointSolver(ClosestPointSolver&&) noexcept = default;
 ClosestPointSolver& ClosestPointSolver::operator=(ClosestPointSolver&&) noexcept = default;
 
-std::size_t ClosestPointSolver::seed_count() const { return seeds_->seed.size(); }
+std::size_t ClosestPointSolver::seed_count() const { return seeds_->cell.size(); }
 
 std::vector<Point3> ClosestPointSolver::seed_points_in_region() const {
   const Seeds& sd = *seeds_;
   std::vector<Point3> out;
-  for (std::size_t k = 0; k < sd.seed.size(); ++k) {
-    if (sd.seed_on_face[k]) out.push_back(sd.seed[k]);
+  for (const Seeds::Cell& c : sd.cell) {
+    if (c.on_face) out.push_back(c.seed);
   }
   return out;
 }
@@ -631,6 +733,9 @@ constexpr int kFocalParts = 4;
 inline double box_distance_sq(const Point3& q, const Eigen::Array3d& lo, const Eigen::Array3d& hi) {
   const Eigen::Array3d x = q.array();
   return (lo - x).max(x - hi).max(0.0).square().sum();
+}
+inline double box_distance_sq(const Point3& q, const float (&lo)[3], const float (&hi)[3]) {
+  return box_distance_sq(q, Eigen::Array3d(lo[0], lo[1], lo[2]), Eigen::Array3d(hi[0], hi[1], hi[2]));
 }
 
 }  // namespace
@@ -659,16 +764,20 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, int p
     for (int b = 0; b < parts; ++b) {
       const Domain box{a == 0 ? cell.u0 : cell.u0 + a * du, a + 1 == parts ? cell.u1 : cell.u0 + (a + 1) * du,
                        b == 0 ? cell.v0 : cell.v0 + b * dv, b + 1 == parts ? cell.v1 : cell.v0 + (b + 1) * dv};
-      search_box(query, box, spans, search);
+      // A whole cell's search starts from its centre, where the derivatives are stored.
+      const Seeds::Start& at_centre = sd.start[k];
+      const SurfaceD2 start = parts == 1 && at_centre.usable ? at_centre.at(sd.cell[k].seed) : SurfaceD2{};
+      search_box(query, box, spans, parts == 1 && at_centre.usable ? &start : nullptr, search);
     }
   }
 }
 
-void ClosestPointSolver::search_box(const Point3& query, const Domain& box, KnotSpans spans, Search& search) const {
+void ClosestPointSolver::search_box(const Point3& query, const Domain& box, KnotSpans spans, const SurfaceD2* start,
+                                    Search& search) const {
   const Domain whole = surface_.domain();
   double flat = 1.0;
   ClosestPointResult r = refine_in(seeds_->bezier, query, 0.5 * (box.u0 + box.u1), 0.5 * (box.v0 + box.v1), box,
-                                   options_.max_iterations, spans, &flat);
+                                   options_.max_iterations, spans, &flat, start);
   ++search.starts;
   search.iterations += r.iterations;
   const bool on_inner_edge = r.status == ClosestPointStatus::OnBoundary &&
@@ -738,41 +847,40 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   // than the bound: the best point given, or the nearest seed on the face seen so far (a point of the surface),
   // whichever is smaller. Squared distances throughout the pass.
   using Candidate = std::pair<double, std::uint32_t>;  // (seed's squared distance, cell)
-  using Entry = std::pair<double, int>;                 // (squared distance to the node's box, node)
+  using Entry = std::pair<double, std::int64_t>;        // (squared distance to the node's box, node or leaf)
   thread_local std::vector<Candidate> candidates;
   thread_local std::vector<Entry> stack;
   candidates.clear();
   stack.clear();
   double bound_sq = best.distance * best.distance;
   const int nv_cells = sd.axis_v.count();
-  if (sd.nodes[0].in_region) stack.emplace_back(box_distance_sq(query, sd.nodes[0].lo, sd.nodes[0].hi), 0);
+  if (sd.root_meets_region) stack.emplace_back(box_distance_sq(query, sd.root_lo, sd.root_hi), sd.root);
   while (!stack.empty()) {
-    const auto [lower_sq, at] = stack.back();
+    const auto [lower_sq, ref] = stack.back();
     stack.pop_back();
     if (lower_sq >= bound_sq) continue;  // the bound has shrunk since the node was pushed
-    const Seeds::Node& node = sd.nodes[static_cast<std::size_t>(at)];
-    if (node.left < 0) {
-      for (int a = 0; a < node.cells_u; ++a)
-        for (int b = 0; b < node.cells_v; ++b) {
-          const std::uint32_t k = node.cell + static_cast<std::uint32_t>(a * nv_cells + b);
-          if (!sd.in_region[k]) continue;
-          const double seed_sq = (query - sd.seed[k]).squaredNorm();
-          if (sd.seed_on_face[k]) bound_sq = std::min(bound_sq, seed_sq);
+    if (ref < 0) {
+      const Seeds::Leaf leaf = Seeds::leaf(ref);
+      for (int a = 0; a < leaf.cells_u; ++a)
+        for (int b = 0; b < leaf.cells_v; ++b) {
+          const std::uint32_t k = leaf.cell + static_cast<std::uint32_t>(a * nv_cells + b);
+          const Seeds::Cell& c = sd.cell[k];
+          if (!c.in_region) continue;
+          const double seed_sq = (query - c.seed).squaredNorm();
+          if (c.on_face) bound_sq = std::min(bound_sq, seed_sq);
           candidates.emplace_back(seed_sq, k);
         }
       continue;
     }
-    const Seeds::Node& l = sd.nodes[static_cast<std::size_t>(node.left)];
-    const Seeds::Node& r = sd.nodes[static_cast<std::size_t>(node.right)];
-    constexpr double kNever = std::numeric_limits<double>::infinity();
-    const double dl = l.in_region ? box_distance_sq(query, l.lo, l.hi) : kNever;
-    const double dr = r.in_region ? box_distance_sq(query, r.lo, r.hi) : kNever;
+    const Seeds::Node& node = sd.nodes[static_cast<std::size_t>(ref)];
+    const double dl = box_distance_sq(query, node.lo[0], node.hi[0]);
+    const double dr = box_distance_sq(query, node.lo[1], node.hi[1]);
     if (dl <= dr) {
-      if (dr < bound_sq) stack.emplace_back(dr, node.right);
-      if (dl < bound_sq) stack.emplace_back(dl, node.left);
+      if (dr < bound_sq) stack.emplace_back(dr, node.child[1]);
+      if (dl < bound_sq) stack.emplace_back(dl, node.child[0]);
     } else {
-      if (dl < bound_sq) stack.emplace_back(dl, node.left);
-      if (dr < bound_sq) stack.emplace_back(dr, node.right);
+      if (dl < bound_sq) stack.emplace_back(dl, node.child[0]);
+      if (dr < bound_sq) stack.emplace_back(dr, node.child[1]);
     }
   }
   // Nearest seed first: without a bound its cell is searched whatever its tests, and its point bounds the rest;
@@ -789,14 +897,16 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
     if (std::isnan(flat)) flat = flatness(hessian(make_iterate(surface_, query, known->u, known->v, {})));
     if (flat >= kFocalFlatness) skip = cell_holding(known->u, known->v);
   }
-  auto may_hold_closer = [&](std::uint32_t k) {
-    const Vector3 q_minus_c = query - sd.seed[k];
-    return sd.box[k].lower_bound(q_minus_c) < best.distance &&
-           sd.box[k].may_hold_critical_point(q_minus_c, sd.cone_tan[k]);
+  // The seed's distance less the cell's reach is a looser bound than the oriented box's, but needs nothing more
+  // read from memory: it turns most candidates away before their boxes are loaded.
+  auto may_hold_closer = [&](double seed_sq, std::uint32_t k) {
+    if (std::sqrt(seed_sq) - sd.cell[k].reach >= best.distance) return false;
+    const Vector3 q_minus_c = query - sd.cell[k].seed;
+    return sd.box[k].lower_bound(q_minus_c) < best.distance && sd.box[k].may_hold_critical_point(q_minus_c);
   };
   for (const auto& [seed_sq, k] : candidates) {
     if (static_cast<long>(k) == skip) continue;
-    if (!std::isfinite(best.distance) || may_hold_closer(k)) search_cell(query, k, 1, search);
+    if (!std::isfinite(best.distance) || may_hold_closer(seed_sq, k)) search_cell(query, k, 1, search);
   }
   // Near a centre of curvature the distance is flat: a cell may hold two minima, of which Newton finds one, and
   // Newton may not settle. There (or after any Newton that did not settle) every cell that could still hold a
@@ -804,7 +914,7 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   if (search.found &&
       (best.status == ClosestPointStatus::NotConverged || (best.ok() && search.flat < kFocalFlatness))) {
     for (const auto& [seed_sq, k] : candidates) {
-      if (may_hold_closer(k)) search_cell(query, k, kFocalParts, search);
+      if (may_hold_closer(seed_sq, k)) search_cell(query, k, kFocalParts, search);
     }
   }
   search.best.iterations = search.iterations;

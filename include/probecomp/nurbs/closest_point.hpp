@@ -130,8 +130,10 @@ class ClosestPointSolver {
   // Searches seed cell k, cut into parts × parts boxes: Newton kept inside each box, followed beyond it if it stops
   // on an inner edge and is the best so far.
   void search_cell(const Point3& query, std::uint32_t k, int parts, Search& search) const;
-  // Newton from the centre of `box`, a part of one cell whose knot spans are `spans`, kept inside it.
-  void search_box(const Point3& query, const Domain& box, KnotSpans spans, Search& search) const;
+  // Newton from the centre of `box`, a part of one cell whose knot spans are `spans`, kept inside it; `start`, if
+  // given, is the surface there with its derivatives in floats.
+  void search_box(const Point3& query, const Domain& box, KnotSpans spans, const SurfaceD2* start,
+                  Search& search) const;
   // The cell whose parameter box holds (u, v), or −1 when rounding leaves that in doubt.
   [[nodiscard]] long cell_holding(double u, double v) const;
 
