@@ -77,20 +77,24 @@ TEST(NearestOtherAndFirst, EqualsBothFunctionsApart) {
   EXPECT_EQ(repeats, 352u);
 }
 
-// Over 131 072 points the search runs over several k-d trees (blocks cut at the median of the longest side, built in
-// parallel): checked against brute force for the points nearest the cuts (a slab about x = 0, the first cut of
-// points spread along x, and x = ±50, the next ones) and a random sample, with repeats across the cut, a non-finite
-// point, and more neighbours than one.
-TEST(NearestOthers, ACloudOfSeveralBlocksFindsWhatBruteForceFinds) {
+// Checked against brute force for the points nearest the blocks' cuts (within `slab` mm of `cuts`, the x where
+// points spread along x are cut) and a random sample, with repeats across the cuts, a non-finite point, and more
+// neighbours than one.
+void expect_brute_force_neighbours(int points, const std::vector<double>& cuts, double slab) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> x(-100.0, 100.0), y(-40.0, 40.0), z(-1.0, 1.0);
   std::vector<Point3> p;
-  for (int k = 0; k < 300000; ++k) p.emplace_back(x(rng), y(rng), z(rng));
-  // Repeats of points next to the first cut, some of them on the other side of it.
+  for (int k = 0; k < points; ++k) p.emplace_back(x(rng), y(rng), z(rng));
+  // Repeats of points next to the cuts, some of them on the other side of one.
   std::vector<std::size_t> near_cut;
   for (std::size_t k = 0; k < p.size(); ++k) {
-    if (std::abs(p[k].x()) < 0.05 || std::abs(std::abs(p[k].x()) - 50.0) < 0.05) near_cut.push_back(k);
+    for (const double c : cuts) {
+      if (std::abs(p[k].x() - c) < slab) {
+        near_cut.push_back(k);
+        break;
+      }
+    }
   }
   ASSERT_GT(near_cut.size(), 200u);
   for (std::size_t i = 0; i < 100; ++i) p.push_back(p[near_cut[i]]);
@@ -99,7 +103,7 @@ TEST(NearestOthers, ACloudOfSeveralBlocksFindsWhatBruteForceFinds) {
   std::vector<std::size_t> check = near_cut;
   std::uniform_int_distribution<std::size_t> any(0, n - 2);
   for (int k = 0; k < 300; ++k) check.push_back(any(rng));
-  for (std::size_t i = 300000; i < n - 1; ++i) check.push_back(i);
+  for (std::size_t i = static_cast<std::size_t>(points); i < n - 1; ++i) check.push_back(i);
 
   constexpr int kCount = 3;
   const std::vector<std::uint32_t> three = nearest_others(p, kCount);
@@ -129,6 +133,18 @@ TEST(NearestOthers, ACloudOfSeveralBlocksFindsWhatBruteForceFinds) {
   std::size_t repeats = 0;
   for (std::size_t k = 0; k < n; ++k) repeats += both.first[k] != k;
   EXPECT_EQ(repeats, 100u);
+}
+
+// Over 131 072 points the search runs over several k-d trees (blocks cut at the median of the longest side, built in
+// parallel): the first cut about x = 0 (points spread along x), the next ones about x = ±50.
+TEST(NearestOthers, ACloudOfSeveralBlocksFindsWhatBruteForceFinds) {
+  expect_brute_force_neighbours(300000, {0.0, -50.0, 50.0}, 0.05);
+}
+
+// From 8 192 points on, the points are halved at least once (two trees built side by side): 10 000 points, cut
+// about x = 0.
+TEST(NearestOthers, TenThousandPointsInTwoBlocksFindWhatBruteForceFinds) {
+  expect_brute_force_neighbours(10000, {0.0}, 3.0);
 }
 
 }  // namespace
