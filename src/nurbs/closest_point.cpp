@@ -350,7 +350,9 @@ struct alignas(64) CellBox {
                    : std::numeric_limits<float>::infinity();
   }
 
-  [[nodiscard]] Eigen::Array3d coordinates(const Vector3& e) const { return {e.dot(vec(t1)), e.dot(vec(t2)), e.dot(vec(n))}; }
+  [[nodiscard]] Eigen::Array3d coordinates(const Vector3& e) const {
+    return {e.dot(vec(t1)), e.dot(vec(t2)), e.dot(vec(n))};
+  }
 
   // The box of the Cartesian points of a Bézier net (row-major, (p+1)·(q+1) homogeneous points) in this frame.
   void enclose(const Point3& origin, std::span<const HomogeneousPoint> net) {
@@ -368,7 +370,8 @@ struct alignas(64) CellBox {
 
   [[nodiscard]] double lower_bound(const Vector3& q_minus_c) const {
     const Eigen::Array3d x = coordinates(q_minus_c);
-    const Eigen::Array3d gap = (Eigen::Array3d(lo[0], lo[1], lo[2]) - x).max(x - Eigen::Array3d(hi[0], hi[1], hi[2])).max(0.0);
+    const Eigen::Array3d low(lo[0], lo[1], lo[2]), high(hi[0], hi[1], hi[2]);
+    const Eigen::Array3d gap = (low - x).max(x - high).max(0.0);
     return std::sqrt(gap.square().sum()) / (1.0 + kFrameSlack);
   }
 
@@ -700,9 +703,12 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
   sd.root = root.ref;
   sd.root_lo = root.lo;
   sd.root_hi = root.hi;
-  sd.root_meets_region = std::any_of(sd.cell.begin(), sd.cell.end(), [](const Seeds::Cell& c) { return c.in_region != 0; });
+  sd.root_meets_region =
+      std::any_of(sd.cell.begin(), sd.cell.end(), [](const Seeds::Cell& c) { return c.in_region != 0; });
   if (region_ != nullptr) {
-    for (std::size_t k = 0; k < n; ++k) sd.cell[k].on_face = sd.cell[k].in_region && region_->contains(sd.u[k], sd.v[k]) ? 1 : 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      sd.cell[k].on_face = sd.cell[k].in_region && region_->contains(sd.u[k], sd.v[k]) ? 1 : 0;
+    }
   }
 }
 
@@ -867,7 +873,12 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
           const Seeds::Cell& c = sd.cell[k];
           if (!c.in_region) continue;
           const double seed_sq = (query - c.seed).squaredNorm();
-          if (c.on_face) bound_sq = std::min(bound_sq, seed_sq);
+          if (c.on_face && seed_sq < bound_sq) {
+            bound_sq = seed_sq;
+            // The nearest seed's cell is searched first, from its stored derivatives: ask for them while the pass
+            // goes on (queries in random order find them outside the cache: 3–5 % of the query's time).
+            __builtin_prefetch(&sd.start[k]);
+          }
           candidates.emplace_back(seed_sq, k);
         }
       continue;
