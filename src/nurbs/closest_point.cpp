@@ -642,7 +642,10 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
       const std::size_t k = static_cast<std::size_t>(i) * nv + j;
       sd.u[k] = 0.5 * (sd.axis_u.lower(i) + sd.axis_u.upper(i));
       sd.v[k] = 0.5 * (sd.axis_v.lower(j) + sd.axis_v.upper(j));
-      const SurfaceD2 d = derivatives_d2(surface_, sd.u[k], sd.v[k]);
+      // On the Bézier form in the cell's known spans, as the search's Newton evaluates: Bernstein polynomials.
+      const KnotSpans spans{sd.axis_u.knot_span[static_cast<std::size_t>(sd.axis_u.span(i))],
+                            sd.axis_v.knot_span[static_cast<std::size_t>(sd.axis_v.span(j))]};
+      const SurfaceD2 d = derivatives_d2(sd.bezier, sd.u[k], sd.v[k], spans);
       const Vector3* dk[5] = {&d.Su, &d.Sv, &d.Suu, &d.Suv, &d.Svv};
       sd.start[k].usable = true;
       for (int a = 0; a < 5; ++a)
