@@ -138,5 +138,37 @@ TEST(ClosestPoint, BatchIsIdenticalWhateverTheThreadCount) {
   }
 }
 
+// The search keeps its cells' boxes in floats, whose spacing 2 m from the origin is 1.2e-4 mm: rounded inwards they
+// would hide a foot nearer than that from its own cell. Points 1e-6 mm off a part far from the origin, and a bound
+// (a known point) 3e-6 mm away: every search must find the point's own foot, never return the bound. The plane lies
+// at a height no float holds (800.00003 mm, between floats 6.1e-5 apart), so that its boxes, one float thick, are
+// rounded at both sides.
+TEST(ClosestPoint, CellBoundsInFloatsHideNoFootOfAPartFarFromTheOrigin) {
+  Eigen::Isometry3d far = Eigen::Isometry3d::Identity();
+  far.translate(Vector3(2000.0, -1500.0, 800.0));
+  const Surface parts[] = {make_plane_patch({2000.0, -1500.0, 800.00003}, {100, 0, 0}, {0, 80, 0}, 3, 3, 6, 5),
+                           transformed(testing::freeform_panel(7, 12), far)};
+  for (const Surface& s : parts) {
+    const ClosestPointSolver solver(s);
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> t(0.02, 0.98);
+    int hidden = 0;
+    for (int k = 0; k < 2000; ++k) {
+      const double u = t(rng), v = t(rng);
+      const UnitNormal n = unit_normal(s, u, v);
+      ASSERT_EQ(n.status, UnitNormal::Status::OK);
+      const Point3 on = evaluate(s, u, v);
+      const Point3 query = on + 1e-6 * n.n;
+      ClosestPointResult bound;
+      bound.status = ClosestPointStatus::Converged;
+      bound.distance = 3e-6;
+      const ClosestPointResult r = solver.closest_point(query, bound);
+      hidden += r.distance >= 3e-6;
+      EXPECT_LT((r.point - on).norm(), 1e-6) << "point " << k;
+    }
+    EXPECT_EQ(hidden, 0);
+  }
+}
+
 }  // namespace
 }  // namespace probecomp::nurbs
