@@ -769,14 +769,15 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, int p
   const KnotSpans spans{sd.axis_u.knot_span[static_cast<std::size_t>(sd.axis_u.span(cu))],
                         sd.axis_v.knot_span[static_cast<std::size_t>(sd.axis_v.span(cv))]};
   const double du = (cell.u1 - cell.u0) / parts, dv = (cell.v1 - cell.v0) / parts;
+  // A whole cell's search starts from its centre, where the derivatives are stored.
+  const Seeds::Start& at_centre = sd.start[k];
+  const bool from_centre = parts == 1 && at_centre.usable;
+  const SurfaceD2 start = from_centre ? at_centre.at(sd.cell[k].seed) : SurfaceD2{};
   for (int a = 0; a < parts; ++a) {
     for (int b = 0; b < parts; ++b) {
       const Domain box{a == 0 ? cell.u0 : cell.u0 + a * du, a + 1 == parts ? cell.u1 : cell.u0 + (a + 1) * du,
                        b == 0 ? cell.v0 : cell.v0 + b * dv, b + 1 == parts ? cell.v1 : cell.v0 + (b + 1) * dv};
-      // A whole cell's search starts from its centre, where the derivatives are stored.
-      const Seeds::Start& at_centre = sd.start[k];
-      const SurfaceD2 start = parts == 1 && at_centre.usable ? at_centre.at(sd.cell[k].seed) : SurfaceD2{};
-      search_box(query, box, spans, parts == 1 && at_centre.usable ? &start : nullptr, search);
+      search_box(query, box, spans, from_centre ? &start : nullptr, search);
     }
   }
 }
@@ -912,7 +913,7 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
     if (flat >= kFocalFlatness) skip = cell_holding(known->u, known->v);
   }
   // The seed's distance less the cell's reach is a looser bound than the oriented box's, but needs nothing more
-  // read from memory: it turns most candidates away before their boxes are loaded.
+  // read from memory: it turns candidates away before their boxes are loaded.
   auto may_hold_closer = [&](double seed_sq, std::uint32_t k) {
     if (std::sqrt(seed_sq) - sd.cell[k].reach >= best.distance) return false;
     const Vector3 q_minus_c = query - sd.cell[k].seed;

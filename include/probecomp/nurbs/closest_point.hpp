@@ -7,7 +7,9 @@
 // span and direction in all, shared out by the spans' lengths on the part so that cells are of similar size.
 // Each cell carries three rigorous bounds from its Bézier control points (convex hull property): an oriented
 // box (a lower bound on the distance), an axis-aligned box (for a bounding-volume hierarchy over the cells) and
-// a normal cone (normal_cone.hpp), which excludes a cell that cannot hold a critical point of the distance.
+// a normal cone (normal_cone.hpp), which excludes a cell that cannot hold a critical point of the distance. The
+// bounds are kept in floats rounded outwards (a cache line a cell: the search's time goes to cache misses as much
+// as to arithmetic), and so are the surface's derivatives at each cell's centre, which Newton's first step uses.
 // One depth-first pass over the hierarchy gathers the cells whose boxes are nearer than the nearest seed; Newton
 // runs inside the nearest seed's cell, then inside every other gathered cell that could still hold a closer
 // point; a Newton that stops on a cell's inner edge is followed beyond it. Where the distance is flat at the best
