@@ -342,6 +342,8 @@ float float_below(double x) {
   return static_cast<double>(f) > x ? std::nextafter(f, -inf) : f;
 }
 float float_above(double x) { return -float_below(-x); }
+// Three floats as doubles (exactly).
+Vector3 widened(const float (&a)[3]) { return {a[0], a[1], a[2]}; }
 
 // Each cell is bounded by an oriented box in the frame of its seed c: tangent t1 (along S_u), t2 = n × t1,
 // normal n. The box encloses the cell's Bézier control points (the surface refined so that every cell is a
@@ -362,7 +364,6 @@ struct alignas(64) CellBox {
   // need not be a critical point (cells on the domain's edges or on a C0 knot line) or no cone below 90° exists.
   float cone_tan = std::numeric_limits<float>::infinity();
 
-  static Vector3 vec(const float (&a)[3]) { return {a[0], a[1], a[2]}; }
   void set_frame(const Vector3& T1, const Vector3& T2, const Vector3& N) {
     for (int x = 0; x < 3; ++x) {
       t1[x] = static_cast<float>(T1[x]);
@@ -371,7 +372,7 @@ struct alignas(64) CellBox {
     }
   }
   // The rounded normal, of unit length: the axis of the cell's normal cone.
-  [[nodiscard]] Vector3 axis() const { return vec(n).normalized(); }
+  [[nodiscard]] Vector3 axis() const { return widened(n).normalized(); }
   void set_cone(double tan_half_angle) {
     // An angle a slack wider (tan(θ + δ) ≤ (tan θ + 2δ) / (1 − 2δ tan θ) for small δ), then the frame's stretch.
     const double denominator = 1.0 - 2.0 * kFrameSlack * tan_half_angle;
@@ -381,7 +382,7 @@ struct alignas(64) CellBox {
   }
 
   [[nodiscard]] Eigen::Array3d coordinates(const Vector3& e) const {
-    return {e.dot(vec(t1)), e.dot(vec(t2)), e.dot(vec(n))};
+    return {e.dot(widened(t1)), e.dot(widened(t2)), e.dot(widened(n))};
   }
 
   // The box of the Cartesian points of a Bézier net (row-major, (p+1)·(q+1) homogeneous points) in this frame.
@@ -400,8 +401,7 @@ struct alignas(64) CellBox {
 
   [[nodiscard]] double lower_bound(const Vector3& q_minus_c) const {
     const Eigen::Array3d x = coordinates(q_minus_c);
-    const Eigen::Array3d low(lo[0], lo[1], lo[2]), high(hi[0], hi[1], hi[2]);
-    const Eigen::Array3d gap = (low - x).max(x - high).max(0.0);
+    const Eigen::Array3d gap = (widened(lo).array() - x).max(x - widened(hi).array()).max(0.0);
     return std::sqrt(gap.square().sum()) / (1.0 + kFrameSlack);
   }
 
@@ -452,8 +452,7 @@ struct ClosestPointSolver::Seeds {
     float d[5][3];  // S_u, S_v, S_uu, S_uv, S_vv
     bool usable = false;  // every value finite and within the float range
     [[nodiscard]] SurfaceD2 at(const Point3& S) const {
-      auto vec = [&](int k) { return Vector3(d[k][0], d[k][1], d[k][2]); };
-      return {S, vec(0), vec(1), vec(2), vec(3), vec(4)};
+      return {S, widened(d[0]), widened(d[1]), widened(d[2]), widened(d[3]), widened(d[4])};
     }
   };
   std::vector<Start> start;
@@ -470,9 +469,6 @@ struct ClosestPointSolver::Seeds {
     std::int64_t child[2];     // an inner node's index, or a leaf's cells as leaf_ref() encodes them
   };
   std::vector<Node> nodes;
-  std::int64_t root = 0;            // as Node::child
-  Eigen::Array3d root_lo, root_hi;  // the root's box
-  bool root_meets_region = true;
 
   // A leaf as a negative reference: its first cell (lowest u and v) and its block of cells_u × cells_v ≤ 2 × 2.
   static std::int64_t leaf_ref(std::size_t cell, int cells_u, int cells_v) {
@@ -491,7 +487,9 @@ struct ClosestPointSolver::Seeds {
   struct Built {
     std::int64_t ref;
     Eigen::Array3d lo, hi;  // empty where no cell meets the region
+    bool meets;             // some cell meets the region
   };
+  Built root{};  // the whole hierarchy: the root's reference (as Node::child) and box
   // The hierarchy over cells [i0, i1) × [j0, j1); `leaf_lo`, `leaf_hi`: each cell's axis-aligned box.
   Built build(int i0, int i1, int j0, int j1, const std::vector<Eigen::Array3d>& leaf_lo,
               const std::vector<Eigen::Array3d>& leaf_hi) {
@@ -499,16 +497,15 @@ struct ClosestPointSolver::Seeds {
     if (i1 - i0 <= 2 && j1 - j0 <= 2) {
       const std::size_t nv = static_cast<std::size_t>(axis_v.count());
       Built leaf{leaf_ref(static_cast<std::size_t>(i0) * nv + static_cast<std::size_t>(j0), i1 - i0, j1 - j0),
-                 Eigen::Array3d::Constant(inf), Eigen::Array3d::Constant(-inf)};
-      bool meets = false;
+                 Eigen::Array3d::Constant(inf), Eigen::Array3d::Constant(-inf), false};
       for (int i = i0; i < i1; ++i)
         for (int j = j0; j < j1; ++j) {
           const std::size_t k = static_cast<std::size_t>(i) * nv + static_cast<std::size_t>(j);
           leaf.lo = leaf.lo.min(leaf_lo[k]);
           leaf.hi = leaf.hi.max(leaf_hi[k]);
-          meets = meets || cell[k].in_region != 0;
+          leaf.meets = leaf.meets || cell[k].in_region != 0;
         }
-      if (!meets) leaf.lo = Eigen::Array3d::Constant(inf), leaf.hi = Eigen::Array3d::Constant(-inf);
+      if (!leaf.meets) leaf.lo = Eigen::Array3d::Constant(inf), leaf.hi = Eigen::Array3d::Constant(-inf);
       return leaf;
     }
     const std::size_t at = nodes.size();
@@ -532,7 +529,7 @@ struct ClosestPointSolver::Seeds {
         node.hi[c][x] = float_above(b.hi[x]);
       }
     }
-    return {static_cast<std::int64_t>(at), l.lo.min(r.lo), l.hi.max(r.hi)};
+    return {static_cast<std::int64_t>(at), l.lo.min(r.lo), l.hi.max(r.hi), l.meets || r.meets};
   }
 };
 
@@ -732,12 +729,7 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
     }
   });
   sd.nodes.reserve(n / 2 + 1);
-  const Seeds::Built root = sd.build(0, nu, 0, nv, aabb_lo, aabb_hi);
-  sd.root = root.ref;
-  sd.root_lo = root.lo;
-  sd.root_hi = root.hi;
-  sd.root_meets_region =
-      std::any_of(sd.cell.begin(), sd.cell.end(), [](const Seeds::Cell& c) { return c.in_region != 0; });
+  sd.root = sd.build(0, nu, 0, nv, aabb_lo, aabb_hi);
   if (region_ != nullptr) {
     for (std::size_t k = 0; k < n; ++k) {
       sd.cell[k].on_face = sd.cell[k].in_region && region_->contains(sd.u[k], sd.v[k]) ? 1 : 0;
@@ -774,7 +766,7 @@ inline double box_distance_sq(const Point3& q, const Eigen::Array3d& lo, const E
   return (lo - x).max(x - hi).max(0.0).square().sum();
 }
 inline double box_distance_sq(const Point3& q, const float (&lo)[3], const float (&hi)[3]) {
-  return box_distance_sq(q, Eigen::Array3d(lo[0], lo[1], lo[2]), Eigen::Array3d(hi[0], hi[1], hi[2]));
+  return box_distance_sq(q, widened(lo).array(), widened(hi).array());
 }
 
 }  // namespace
@@ -894,7 +886,7 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   stack.clear();
   double bound_sq = best.distance * best.distance;
   const int nv_cells = sd.axis_v.count();
-  if (sd.root_meets_region) stack.emplace_back(box_distance_sq(query, sd.root_lo, sd.root_hi), sd.root);
+  if (sd.root.meets) stack.emplace_back(box_distance_sq(query, sd.root.lo, sd.root.hi), sd.root.ref);
   while (!stack.empty()) {
     const auto [lower_sq, ref] = stack.back();
     stack.pop_back();
