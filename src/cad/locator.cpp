@@ -94,7 +94,9 @@ struct TrimmedFaceLocator::Boundary {
 };
 
 TrimmedFaceLocator::TrimmedFaceLocator(const Face& face)
-    : face_(&face), solver_(face.surface, {}, face.trim.get()) {
+    : face_(&face),
+      solver_(face.surface, {.shape_spans_u = face.shape_spans_u, .shape_spans_v = face.shape_spans_v},
+              face.trim.get()) {
   if (!face.trimmed()) return;
   auto b = std::make_shared<Boundary>();
   const auto& curves = face.trim->curves();

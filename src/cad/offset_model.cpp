@@ -28,6 +28,8 @@ OffsetModel offset_model(const Model& model, double d, const fitting::OffsetOpti
   out.faces.reserve(results.size());
   for (std::size_t k = 0; k < results.size(); ++k) {
     Face& face = out.model.faces[k];
+    if (face.shape_spans_u == 0) face.shape_spans_u = face.surface.U().num_spans();
+    if (face.shape_spans_v == 0) face.shape_spans_v = face.surface.V().num_spans();
     face.surface = results[k]->surface;
     // Offset faces are approximations to the tolerance, like OpenCASCADE's conversions of procedural surfaces.
     face.exact = false;

@@ -593,10 +593,10 @@ std::vector<double> span_lengths(const Surface& bezier, int direction) {
   return length;
 }
 
-// Cells per span, at least `min_cells` each, proportional to the spans' lengths, about `mean` per span in all:
-// the largest cell length h with Σ max(min_cells, ⌈L_s / h⌉) ≤ mean · spans (bisection; the sum falls as h grows).
-std::vector<int> share_cells(const std::vector<double>& length, int mean, int min_cells) {
-  const double budget = static_cast<double>(mean) * static_cast<double>(length.size());
+// Cells per span, at least `min_cells` each, proportional to the spans' lengths, about `budget` in all: the
+// largest cell length h with Σ max(min_cells, ⌈L_s / h⌉) ≤ budget (bisection; the sum falls as h grows).
+std::vector<int> share_cells(const std::vector<double>& length, double budget, int min_cells) {
+  const int mean = static_cast<int>(std::ceil(budget / static_cast<double>(length.size())));
   auto cells = [&](double h, std::vector<int>* out) {
     double total = 0.0;
     for (std::size_t s = 0; s < length.size(); ++s) {
@@ -644,8 +644,12 @@ ClosestPointSolver::ClosestPointSolver(Surface surface, ClosestPointOptions opti
     // The same number of cells per direction, shared out by the spans' lengths on the part: knot spans of very
     // different sizes (random or refined knots) get cells of similar size, so no cell is large enough to hold
     // two minima while tiny spans waste none.
-    sd.axis_u = CellAxis(sd.bezier.U(), share_cells(span_lengths(sd.bezier, 0), per_u, 2));
-    sd.axis_v = CellAxis(sd.bezier.V(), share_cells(span_lengths(sd.bezier, 1), per_v, 2));
+    // An offset surface's added spans get no cells of their own (shape_spans): its cells are the size of its
+    // nominal surface's.
+    const int shape_u = options_.shape_spans_u > 0 ? std::min(options_.shape_spans_u, spans_u) : spans_u;
+    const int shape_v = options_.shape_spans_v > 0 ? std::min(options_.shape_spans_v, spans_v) : spans_v;
+    sd.axis_u = CellAxis(sd.bezier.U(), share_cells(span_lengths(sd.bezier, 0), static_cast<double>(per_u) * shape_u, 2));
+    sd.axis_v = CellAxis(sd.bezier.V(), share_cells(span_lengths(sd.bezier, 1), static_cast<double>(per_v) * shape_v, 2));
   }
   const int nu = sd.axis_u.count();
   const int nv = sd.axis_v.count();

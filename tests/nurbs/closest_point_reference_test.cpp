@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
 
+#include "probecomp/fitting/offset.hpp"
 #include "probecomp/nurbs/closest_point.hpp"
 #include "probecomp/occt/convert.hpp"
+#include "probecomp/simulation/freeform_case.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace probecomp::nurbs {
@@ -108,6 +110,55 @@ TEST(ClosestPointVsBruteForce, SpiralSheetHasNoWrongAnswersOn10000Points) {
     }
   }
   EXPECT_EQ(wrong, 0);
+}
+
+// An offset surface searched with cells sized by its nominal surface's spans (shape_spans, as the radius-offset
+// model's faces are), not by the many spans its fit added: against brute force on the offset itself, on the demo's
+// panel, a smooth free-form panel and random rational surfaces, offset 1 and 3 mm to both sides (those that do not
+// fold), with points up to 5 mm off. No answer may be farther than the reference. (The search with 2(p+1) cells a
+// span of the offset is counted beside it; on these surfaces neither misses, down to one cell a span.)
+TEST(ClosestPointVsBruteForce, OffsetSurfacesSearchedByTheirNominalsSpansHaveNoWrongAnswers) {
+  const std::vector<Surface> nominals = {
+      simulation::paper_freeform_case().nominal.faces.at(0).surface, testing::freeform_panel(1, 8, true),
+      testing::random_rational_surface(410, {.p = 3, .q = 3, .nu = 8, .nv = 7, .height = 5.0}),
+      testing::random_rational_surface(411, {.p = 3, .q = 3, .nu = 7, .nv = 7, .height = 8.0})};
+  int exercised = 0, queries = 0, wrong = 0, wrong_dense = 0;
+  double cell_share = 0.0;
+  std::uint64_t seed = 500;
+  for (const Surface& s : nominals) {
+    for (const double d : {-3.0, -1.0, 1.0, 3.0}) {
+      const fitting::OffsetResult offset = fitting::offset_surface(s, d);
+      if (!offset.ok()) continue;
+      const Surface& o = offset.surface;
+      ASSERT_TRUE(o.U().num_spans() > s.U().num_spans() || o.V().num_spans() > s.V().num_spans());
+      ++exercised;
+      const ClosestPointSolver solver(o, {.shape_spans_u = s.U().num_spans(), .shape_spans_v = s.V().num_spans()});
+      const ClosestPointSolver dense(o);
+      cell_share += static_cast<double>(solver.seed_count()) / static_cast<double>(dense.seed_count());
+      const auto points = testing::random_points_near(o, 300, 5.0, seed++);
+      const auto ours = solver.closest_points(points);
+      const auto theirs = dense.closest_points(points);
+      const BruteForce brute(o, 6 * o.U().num_spans() + 1, 6 * o.V().num_spans() + 1);
+      std::vector<double> reference(points.size());
+      tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) { reference[i] = brute.distance(points[i]); });
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        ++queries;
+        ASSERT_TRUE(ours[i].ok()) << to_string(ours[i].status) << " at point " << i;
+        wrong_dense += theirs[i].ok() && theirs[i].distance > reference[i] + kReferenceTolerance;
+        if (ours[i].distance > reference[i] + kReferenceTolerance) {
+          ++wrong;
+          ADD_FAILURE() << "offset " << d << " of surface " << &s - nominals.data() << ", point " << i << ": ours "
+                        << ours[i].distance << " brute force " << reference[i] << " (2(p+1) cells a span: "
+                        << theirs[i].distance << ")";
+        }
+      }
+    }
+  }
+  EXPECT_GE(exercised, 12);
+  EXPECT_EQ(wrong, 0);
+  std::cout << "offset surfaces searched by their nominals' spans: " << exercised << " offsets, " << queries
+            << " points, " << wrong << " farther than brute force (" << wrong_dense << " with 2(p+1) cells a span of "
+            << "the offset); " << cell_share / std::max(exercised, 1) << " of those cells on average\n";
 }
 
 // A hard case: a tall rational surface (one knot span covering 70 % of v) with points up to 10 mm off, where many

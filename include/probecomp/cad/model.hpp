@@ -32,6 +32,11 @@ struct Face {
   // null for other faces. Closest points on the face then come from it, so code that changes `surface` (moves or
   // deforms the face) must change or drop this too.
   std::shared_ptr<const AnalyticFace> analytic = nullptr;
+  // The knot spans per direction of the shape `surface` represents, where it has more: an offset face keeps its
+  // nominal face's, its added knots only letting the fit follow the offset. The closest-point search sizes its
+  // cells by these (nurbs::ClosestPointOptions::shape_spans_u). 0: the surface's own.
+  int shape_spans_u = 0;
+  int shape_spans_v = 0;
 
   [[nodiscard]] bool trimmed() const { return trim != nullptr; }
 };

@@ -80,6 +80,12 @@ struct ClosestPointOptions {
   // the default density is lowered (to 2 per span at least): such spans are small and nearly flat, so fewer,
   // still thin, cells bound them as tightly.
   int max_cells = 1 << 16;
+  // The knot spans per direction the surface's shape needs, where the surface has more: an offset surface fitted
+  // with knots added only so that it follows the offset has the shape of its nominal surface. The default density
+  // is then 2·(degree + 1) cells per shape span, shared out over the surface's spans by their lengths (at least 2
+  // each): cells as large on the part as the shape's own spans would get. 0: the surface's own spans.
+  int shape_spans_u = 0;
+  int shape_spans_v = 0;
   int max_iterations = 40;  // per Newton start
 };
 
