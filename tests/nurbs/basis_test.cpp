@@ -67,6 +67,25 @@ TEST(Basis, DerivativesMatchCentralDifferencesAndTheValues) {
   }
 }
 
+// The cubic's first and second derivatives alone (the closest-point Newton's and the normals' calls, with the order
+// fixed at compile time so that A2.3's loops unroll) are the same numbers, bit for bit, as the rows of the general
+// call: the same arithmetic in the same order.
+TEST(Basis, ACubicsFirstAndSecondDerivativesAloneAreBitIdenticalToTheGeneralOnes) {
+  const KnotVector U({0, 0, 0, 0, 0.13, 0.4, 0.4, 0.55, 0.9, 1, 1, 1, 1}, 3);
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> dist(0.0, 1.0);
+  for (int t = 0; t < 500; ++t) {
+    const double u = dist(rng);
+    const int span = U.find_span(u);
+    double all[4 * (kMaxDegree + 1)], d2[3 * (kMaxDegree + 1)], d1[2 * (kMaxDegree + 1)];
+    basis_function_derivatives(U, span, u, 3, all);
+    basis_function_derivatives(U, span, u, 2, d2);
+    basis_function_derivatives(U, span, u, 1, d1);
+    for (int j = 0; j < 12; ++j) EXPECT_EQ(d2[j], all[j]) << "u " << u << " entry " << j;
+    for (int j = 0; j < 8; ++j) EXPECT_EQ(d1[j], all[j]) << "u " << u << " entry " << j;
+  }
+}
+
 // On a Bézier span (p equal knots at each end) the basis functions are the Bernstein polynomials of
 // t = (u − a)/h; their derivatives, written out by hand for the cubic, are an independent reference for the
 // Bernstein fast path.
