@@ -55,6 +55,14 @@ constexpr double kAitkenMaxRatio = 0.7;
 // search. A paraboloid's distance is out by about |∇κ| D³/6 after a slide of D: at D = 2σ̂ = 0.1 mm on a face curved
 // to a radius of 10 mm that changes over 10 mm, 2e-6 mm. A tangent plane's would be κD²/2 = 5e-4 mm.
 constexpr double kSlideReach = 2.0;
+// The coarse stage (register_points) is a start for the whole set, which moves it by about the subset's own
+// uncertainty σ̂/√m anyway (the two sets' minima differ by that): it stops when an update moves the points by less
+// than this many times the whole set's relative tolerance (a tenth of σ̂/√m by default: σ̂/√m), and its slides go
+// this many times farther between searches (their model error grows as the cube of the distance: 10^(1/3) for a ten
+// times coarser precision). 10 000 points on the demo's panel, 4 other cases: the subset's searches 3–5 → 2, the
+// errors against the truth unchanged to 0.1 nm.
+constexpr double kCoarseToleranceFactor = 10.0;
+constexpr double kCoarseReachFactor = 2.154434690031884;  // 10^(1/3)
 
 bool usable(const cad::ModelPoint& m, double max_distance) {
   return m.ok() && !m.on_trim_edge && m.status != ClosestPointStatus::OnBoundary && std::abs(m.distance) <= max_distance;
@@ -197,7 +205,7 @@ std::string describe(double mm_value) {
 // The ICP loop on all `machine_points`. `hints` (empty, or one per point) start the first pass's Newton.
 RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point3> machine_points,
                            const RegistrationOptions& options, std::vector<cad::ModelPoint> hints,
-                           std::span<const double> offsets) {
+                           std::span<const double> offsets, double slide_reach = kSlideReach) {
   RegistrationResult result;
   const std::size_t n = machine_points.size();
   const std::size_t needed = options.metric == Metric::PointToPlane ? 6 : 3;
@@ -364,7 +372,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
       used = correspond(next);
       ++result.searches;
       drift = 0.0;
-      reach = kSlideReach * scale;
+      reach = slide_reach * scale;
     } else {
       used = slide(last_motion);
     }
@@ -502,7 +510,10 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
     subset.push_back(machine_points[i]);
     if (!offsets.empty()) subset_offsets.push_back(offsets[i]);
   }
-  const RegistrationResult coarse = iterate(model, subset, options, {}, subset_offsets);
+  RegistrationOptions coarse_options = options;
+  coarse_options.criteria.relative_motion_tolerance *= kCoarseToleranceFactor;
+  const RegistrationResult coarse =
+      iterate(model, subset, coarse_options, {}, subset_offsets, kCoarseReachFactor * kSlideReach);
   if (coarse.status == Status::TooFewPoints || coarse.status == Status::NumericalError) {
     return iterate(model, machine_points, options, {}, offsets);
   }
