@@ -179,18 +179,32 @@ constexpr std::size_t kChunkMemoryBytes = std::size_t{64} << 20;
 
 // The unknown each of rb's basis functions multiplies, in idx.
 void row_unknowns(const Surface& s, const Ordering& order, const RationalBasis& rb, int* idx) {
-  const int q = s.q(), m = (s.p() + 1) * (q + 1);
-  for (int a = 0; a < m; ++a) idx[a] = order.index(rb.i0 + a / (q + 1), rb.j0 + a % (q + 1));
+  const int p = s.p(), q = s.q();
+  for (int i = 0; i <= p; ++i)
+    for (int j = 0; j <= q; ++j) idx[i * (q + 1) + j] = order.index(rb.i0 + i, rb.j0 + j);
+}
+
+// The start surface's control points in Cartesian form, row i (u) major: made once per fit for every basis row,
+// which would otherwise divide each of its (p+1)(q+1) homogeneous points by its weight again.
+std::vector<Point3> cartesian_net(const Surface& s) {
+  std::vector<Point3> net(static_cast<std::size_t>(s.num_u()) * static_cast<std::size_t>(s.num_v()));
+  for (int i = 0; i < s.num_u(); ++i)
+    for (int j = 0; j < s.num_v(); ++j) net[static_cast<std::size_t>(i) * s.num_v() + j] = s.control_point(i, j);
+  return net;
 }
 
 // The start surface's basis at t: its rational basis functions in rb, the unknown each one multiplies in idx, and
-// the start surface's point S⁰(t) (the basis row every use of a point needs).
-Vector3 basis_row(const Surface& s, const Ordering& order, const SurfaceParameter& t, RationalBasis& rb, int* idx) {
+// the start surface's point S⁰(t) (the basis row every use of a point needs); `net` is cartesian_net(s).
+Vector3 basis_row(const Surface& s, std::span<const Point3> net, const Ordering& order, const SurfaceParameter& t,
+                  RationalBasis& rb, int* idx) {
   detail::rational_basis(s, t.u, t.v, rb);
   row_unknowns(s, order, rb, idx);
-  const int q = s.q(), m = (s.p() + 1) * (q + 1);
+  const int p = s.p(), q = s.q();
   Vector3 S0 = Vector3::Zero();
-  for (int a = 0; a < m; ++a) S0 += rb.R[a] * s.control_point(rb.i0 + a / (q + 1), rb.j0 + a % (q + 1));
+  for (int i = 0; i <= p; ++i) {
+    const Point3* row = &net[static_cast<std::size_t>(rb.i0 + i) * s.num_v() + rb.j0];
+    for (int j = 0; j <= q; ++j) S0 += rb.R[i * (q + 1) + j] * row[j];
+  }
   return S0;
 }
 
@@ -203,8 +217,9 @@ struct DataTerms {
   int used = 0;
 };
 
-DataTerms assemble_data(const Surface& s, const Ordering& order, int b, std::span<const Point3> points,
-                        std::span<const SurfaceParameter> params, std::span<const double> weights) {
+DataTerms assemble_data(const Surface& s, std::span<const Point3> net, const Ordering& order, int b,
+                        std::span<const Point3> points, std::span<const SurfaceParameter> params,
+                        std::span<const double> weights) {
   const int n = s.num_u() * s.num_v();
   const int p = s.p(), q = s.q();
   const std::size_t n_points = points.size();
@@ -240,7 +255,7 @@ DataTerms assemble_data(const Surface& s, const Ordering& order, int b, std::spa
     for (std::size_t k = n_points * c / chunks; k < n_points * (c + 1) / chunks; ++k) {
       const double w = weights.empty() ? 1.0 : weights[k];
       if (w == 0.0) continue;
-      const Vector3 y = points[k] - basis_row(s, order, params[k], rb, idx);
+      const Vector3 y = points[k] - basis_row(s, net, order, params[k], rb, idx);
       if (rb.i0 != run_i0 || rb.j0 != run_j0) {
         flush();
         run_i0 = rb.i0;
@@ -383,7 +398,7 @@ struct CvRows {
   std::vector<double> w;     // one per row
 };
 
-CvRows cv_rows(const Surface& s, const Ordering& order, std::span<const Point3> points,
+CvRows cv_rows(const Surface& s, std::span<const Point3> net, const Ordering& order, std::span<const Point3> points,
                std::span<const SurfaceParameter> params, std::span<const double> weights) {
   const int p = s.p(), q = s.q();
   const std::size_t n_points = points.size();
@@ -417,7 +432,7 @@ CvRows cv_rows(const Surface& s, const Ordering& order, std::span<const Point3> 
     RationalBasis rb;
     for (std::size_t r = range.begin(); r != range.end(); ++r) {
       const std::size_t k = chosen[r], at = to[r];
-      rows.y[at] = points[k] - basis_row(s, order, params[k], rb, &rows.idx[at * m]);
+      rows.y[at] = points[k] - basis_row(s, net, order, params[k], rb, &rows.idx[at * m]);
       std::copy(rb.R, rb.R + m, &rows.R[at * m]);
       rows.w[at] = weights.empty() ? 1.0 : weights[k];
     }
@@ -538,14 +553,15 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   const Ordering order(nu, nv);
   const int b = std::min(order.bandwidth(start.p(), start.q()), n - 1);
 
-  const DataTerms data = assemble_data(start, order, b, points, params, weights);
+  const std::vector<Point3> net = cartesian_net(start);
+  const DataTerms data = assemble_data(start, net, order, b, points, params, weights);
   if (data.used == 0 || !(data.weight_sum > 0.0)) return result;
   const Band G = thin_plate_energy(start, order, b, span_weights);
   const double data_trace = data.AtWA.trace();
   const double scale_ratio = data_trace / std::max(G.trace(), 1e-300);
   const double ridge = options.ridge * data_trace / n;
 
-  const CvRows rows = cv_rows(start, order, points, params, weights);
+  const CvRows rows = cv_rows(start, net, order, points, params, weights);
   std::atomic<int> evaluations{0};  // trials may run side by side
   auto run = [&](double t10) {
     ++evaluations;

@@ -4,8 +4,12 @@
 
 namespace probecomp::nurbs {
 
-void basis_functions(const KnotVector& U, int span, double u, double* N) {
-  const int p = U.degree();
+namespace {
+
+// A2.2, with the degree fixed at compile time where P > 0 (the loops unroll; the same arithmetic in the same order).
+template <int P>
+void basis_functions_impl(const KnotVector& U, int span, double u, double* N) {
+  const int p = P > 0 ? P : U.degree();
   double left[kMaxDegree + 1];
   double right[kMaxDegree + 1];
   N[0] = 1.0;
@@ -20,6 +24,13 @@ void basis_functions(const KnotVector& U, int span, double u, double* N) {
     }
     N[j] = saved;
   }
+}
+
+}  // namespace
+
+void basis_functions(const KnotVector& U, int span, double u, double* N) {
+  if (U.degree() == 3) return basis_functions_impl<3>(U, span, u, N);  // bicubic fits and evaluations
+  basis_functions_impl<0>(U, span, u, N);
 }
 
 namespace {
@@ -39,6 +50,9 @@ void derivatives_impl(const KnotVector& U, int span, double u, int n_runtime, do
   constexpr int W = (P > 0 ? P : kMaxDegree) + 1;
   double ndu[W][W];  // ndu[j][r]: basis functions (upper triangle incl. diagonal) and knot differences
   double inv[W][W];  // inv[j][r] = 1 / ndu[j][r] in the lower triangle (j > r)
+  // GCC cannot see that the cases with n read at run time read only the lower triangle they set
+  // (-Wmaybe-uninitialized); zeroed there alone, so that the closest-point Newton's calls pay nothing for it.
+  if constexpr (N < 0) std::fill(&inv[0][0], &inv[0][0] + W * W, 0.0);
   double a[2][W];
   double left[W];
   double right[W];
