@@ -147,9 +147,29 @@ double fixed_quadratic_form(const double* block, const double* r) {
   return x.dot(y);
 }
 
+// A bicubic row's form, the pipeline's every fit (17 cross-validation trials of every point at 10 000 points): the
+// product summed column by column in four 4-vectors that stay in registers. As many instructions as Eigen's general
+// matrix–vector kernel, which B * x calls at this size (about 560 a row, callgrind), but without its set-up for any
+// size: the 10 000-point case's fit 23.8 → 22.3 ms (21 runs interleaved). The sums' order differs from the kernel's,
+// so the scores differ in their last bits; the λ chosen, and so the output, were the same on every case measured.
+double bicubic_quadratic_form(const double* block, const double* r) {
+  using Piece = Eigen::Matrix<double, 4, 1>;
+  Piece y0 = Piece::Zero(), y1 = Piece::Zero(), y2 = Piece::Zero(), y3 = Piece::Zero();
+  for (int j = 0; j < 16; ++j) {
+    const double x = r[j];
+    const double* column = block + 16 * j;
+    y0 += Eigen::Map<const Piece>(column) * x;
+    y1 += Eigen::Map<const Piece>(column + 4) * x;
+    y2 += Eigen::Map<const Piece>(column + 8) * x;
+    y3 += Eigen::Map<const Piece>(column + 12) * x;
+  }
+  return Eigen::Map<const Piece>(r).dot(y0) + Eigen::Map<const Piece>(r + 4).dot(y1) +
+         Eigen::Map<const Piece>(r + 8).dot(y2) + Eigen::Map<const Piece>(r + 12).dot(y3);
+}
+
 double block_quadratic_form(const double* block, const double* r, int m) {
   switch (m) {
-    case 16: return fixed_quadratic_form<16>(block, r);  // bicubic: every fit of the pipeline
+    case 16: return bicubic_quadratic_form(block, r);  // bicubic: every fit of the pipeline
     case 9: return fixed_quadratic_form<9>(block, r);
     default: {
       const Eigen::Map<const Eigen::MatrixXd> B(block, m, m);
