@@ -176,27 +176,27 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
   j << "{\"method\": \"" << compensation::to_string(r.method) << "\", \"units\": \"mm\",\n \"inputs\": {\"cad\": "
     << json_string(inputs.cad) << ", \"points\": " << json_string(inputs.points) << ", \"points_unit\": \""
     << inputs.points_unit.name << "\", \"probe_radius\": "
-    << (inputs.probe_radius ? fmt("%.9g", *inputs.probe_radius) : std::string("null")) << ", \"tip_radii\": [";
-  for (std::size_t k = 0; k < inputs.tip_radii.size(); ++k) j << (k ? ", " : "") << fmt("%.9g", inputs.tip_radii[k]);
+    << (inputs.probe_radius ? json_number("%.9g", *inputs.probe_radius) : std::string("null")) << ", \"tip_radii\": [";
+  for (std::size_t k = 0; k < inputs.tip_radii.size(); ++k) j << (k ? ", " : "") << json_number("%.9g", inputs.tip_radii[k]);
   j << "]},\n \"transform\": [";
   for (int a = 0; a < 4; ++a) {
     j << (a ? ",\n               [" : "[");
-    for (int b = 0; b < 4; ++b) j << (b ? ", " : "") << fmt("%.15g", M(a, b));
+    for (int b = 0; b < 4; ++b) j << (b ? ", " : "") << json_number("%.15g", M(a, b));
     j << "]";
   }
   j << "],\n \"registration\": {\"converged\": " << (r.registration.converged() ? "true" : "false") << ", \"status\": \""
     << registration::to_string(r.registration.status) << "\", \"stop_reason\": " << json_string(r.registration.stop_reason)
-    << ", \"rms\": " << fmt("%.9g", r.registration.rms)
+    << ", \"rms\": " << json_number("%.9g", r.registration.rms)
     << ", \"iterations\": " << r.registration.iterations + r.registration.coarse_iterations
     << ", \"searches\": " << r.registration.searches
-    << ", \"scale\": " << fmt("%.9g", r.registration.scale) << ", \"inliers\": " << r.registration.inliers
+    << ", \"scale\": " << json_number("%.9g", r.registration.scale) << ", \"inliers\": " << r.registration.inliers
     << ", \"starts\": " << r.registration.starts << ", \"left_out\": " << r.registration.left_out
     << ", \"free_motions\": [";
   // Machine frame, as the transform maps to: the motions the data do not fix, held at the start.
   // Appended piecewise: GCC 12 flags `"[" + std::string` with a false -Wrestrict.
   const auto vec = [](const Vector3& v) {
     std::string s = "[";
-    s += fmt("%.9g", v.x()) + ", " + fmt("%.9g", v.y()) + ", " + fmt("%.9g", v.z()) + "]";
+    s += json_number("%.9g", v.x()) + ", " + json_number("%.9g", v.y()) + ", " + json_number("%.9g", v.z()) + "]";
     return s;
   };
   for (std::size_t k = 0; k < r.registration.constraints.free.size(); ++k) {
@@ -212,13 +212,13 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
     const compensation::FaceReport& x = r.faces[f];
     j << (f ? ",\n   " : "\n   ") << "{\"face\": " << x.face << ", \"points\": " << x.points
       << ", \"fitted\": " << (x.fitted ? "true" : "false") << ", \"material_side\": \"" << cad::to_string(x.material)
-      << "\", \"mean_u\": " << fmt("%.9g", x.mean_uncertainty);
+      << "\", \"mean_u\": " << json_number("%.9g", x.mean_uncertainty);
     if (x.fitted) {
       j << ", \"control_points\": " << x.control_points << ", \"fits\": " << x.fits
-        << ", \"refinement_rounds\": " << x.rounds << ", \"rms_residual\": " << fmt("%.9g", x.rms)
-        << ", \"max_residual\": " << fmt("%.9g", x.max_residual) << ", \"noise_estimate\": " << fmt("%.9g", x.noise_sigma)
-        << ", \"effective_dof\": " << fmt("%.6g", x.effective_dof)
-        << ", \"log10_smoothing\": " << fmt("%.4g", x.log10_smoothing)
+        << ", \"refinement_rounds\": " << x.rounds << ", \"rms_residual\": " << json_number("%.9g", x.rms)
+        << ", \"max_residual\": " << json_number("%.9g", x.max_residual) << ", \"noise_estimate\": " << json_number("%.9g", x.noise_sigma)
+        << ", \"effective_dof\": " << json_number("%.6g", x.effective_dof)
+        << ", \"log10_smoothing\": " << json_number("%.4g", x.log10_smoothing)
         << ", \"outliers\": " << x.count(compensation::PointStatus::Outlier) << ", \"repeated_points\": " << x.repeated
         << ", \"noise_reached\": " << (x.fit_status == fitting::AdaptiveFitResult::Status::OK ? "true" : "false");
     }
@@ -227,8 +227,8 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
       j << (k ? ", " : "") << "\"" << compensation::to_string(compensation::kPointStatuses[k]) << "\": " << x.counts[k];
     }
     const DeviationSummary& d = dev.faces[f];
-    j << "}, \"deviation\": {\"points\": " << d.points << ", \"mean\": " << fmt("%.9g", d.mean) << ", \"std\": "
-      << fmt("%.9g", d.std) << ", \"min\": " << fmt("%.9g", d.min) << ", \"max\": " << fmt("%.9g", d.max);
+    j << "}, \"deviation\": {\"points\": " << d.points << ", \"mean\": " << json_number("%.9g", d.mean) << ", \"std\": "
+      << json_number("%.9g", d.std) << ", \"min\": " << json_number("%.9g", d.min) << ", \"max\": " << json_number("%.9g", d.max);
     if (tolerance) j << ", \"out_of_tolerance\": " << d.out_of_tolerance;
     j << "}, \"stop_reason\": " << json_string(x.stop_reason) << "}";
   }
@@ -238,10 +238,10 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
     j << (s ? ", " : "") << "\"" << compensation::to_string(compensation::kPointStatuses[s]) << "\": " << st.counts[s];
   }
   j << ", \"total\": " << st.total << "},\n \"deviation\": {\"points\": " << st.count(compensation::PointStatus::Ok)
-    << ", \"mean\": " << fmt("%.9g", st.deviation_mean) << ", \"std\": " << fmt("%.9g", st.deviation_std)
-    << ", \"min\": " << fmt("%.9g", st.deviation_min) << ", \"max\": " << fmt("%.9g", st.deviation_max);
+    << ", \"mean\": " << json_number("%.9g", st.deviation_mean) << ", \"std\": " << json_number("%.9g", st.deviation_std)
+    << ", \"min\": " << json_number("%.9g", st.deviation_min) << ", \"max\": " << json_number("%.9g", st.deviation_max);
   if (tolerance) {
-    j << ", \"tolerance\": [" << fmt("%.9g", tolerance->lower) << ", " << fmt("%.9g", tolerance->upper)
+    j << ", \"tolerance\": [" << json_number("%.9g", tolerance->lower) << ", " << json_number("%.9g", tolerance->upper)
       << "], \"out_of_tolerance\": " << dev.all.out_of_tolerance;
   }
   j << "}";
@@ -249,10 +249,10 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
   for (std::size_t w = 0; w < r.warnings.size(); ++w) j << (w ? ", " : "") << json_string(r.warnings[w]);
   j << "]";
   const compensation::Timings& t = r.seconds;
-  j << ",\n \"timings\": {\"read\": " << fmt("%.4f", files.read) << ", \"prepare\": " << fmt("%.4f", t.prepare)
-    << ", \"register\": " << fmt("%.4f", t.registration) << ", \"fit\": " << fmt("%.4f", t.fitting)
-    << ", \"compensate\": " << fmt("%.4f", t.compensation) << ", \"write\": " << fmt("%.4f", files.write)
-    << ", \"total\": " << fmt("%.4f", files.total) << "}}\n";
+  j << ",\n \"timings\": {\"read\": " << json_number("%.4f", files.read) << ", \"prepare\": " << json_number("%.4f", t.prepare)
+    << ", \"register\": " << json_number("%.4f", t.registration) << ", \"fit\": " << json_number("%.4f", t.fitting)
+    << ", \"compensate\": " << json_number("%.4f", t.compensation) << ", \"write\": " << json_number("%.4f", files.write)
+    << ", \"total\": " << json_number("%.4f", files.total) << "}}\n";
   return j.str();
 }
 
