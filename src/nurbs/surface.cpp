@@ -113,18 +113,19 @@ SurfaceD2 rational_derivatives(const Surface& s, const HomogeneousPoint (&A)[3][
     }
     return r;
   }
-  const double w = A[0][0].w();
+  // One division: its reciprocal multiplies (18 divisions were a fifth of a rational bicubic's evaluation).
+  const double inv_w = 1.0 / A[0][0].w();
   SurfaceD2 r;
-  r.S = A[0][0].head<3>() / w;
+  r.S = A[0][0].head<3>() * inv_w;
   r.Su = r.Sv = r.Suu = r.Suv = r.Svv = Vector3::Zero();
   if (order >= 1) {
-    r.Su = (A[1][0].head<3>() - A[1][0].w() * r.S) / w;
-    r.Sv = (A[0][1].head<3>() - A[0][1].w() * r.S) / w;
+    r.Su = (A[1][0].head<3>() - A[1][0].w() * r.S) * inv_w;
+    r.Sv = (A[0][1].head<3>() - A[0][1].w() * r.S) * inv_w;
   }
   if (order >= 2) {
-    r.Suu = (A[2][0].head<3>() - 2.0 * A[1][0].w() * r.Su - A[2][0].w() * r.S) / w;
-    r.Suv = (A[1][1].head<3>() - A[0][1].w() * r.Su - A[1][0].w() * r.Sv - A[1][1].w() * r.S) / w;
-    r.Svv = (A[0][2].head<3>() - 2.0 * A[0][1].w() * r.Sv - A[0][2].w() * r.S) / w;
+    r.Suu = (A[2][0].head<3>() - 2.0 * A[1][0].w() * r.Su - A[2][0].w() * r.S) * inv_w;
+    r.Suv = (A[1][1].head<3>() - A[0][1].w() * r.Su - A[1][0].w() * r.Sv - A[1][1].w() * r.S) * inv_w;
+    r.Svv = (A[0][2].head<3>() - 2.0 * A[0][1].w() * r.Sv - A[0][2].w() * r.S) * inv_w;
   }
   return r;
 }
