@@ -156,11 +156,37 @@ void bernstein_impl(const KnotVector& U, int span, double u, int n_runtime, doub
   }
 }
 
+// bernstein_impl<3> with n = 2 written out: the same products and sums (the triangle's terms with a zero, s·0 and
+// t·0, left out: for t in [0, 1] they add exactly nothing), without its zeroed table and loops. The closest-point
+// search's Newton evaluates this twice a step.
+void cubic_bernstein_d2(const KnotVector& U, int span, double u, double* ders) {
+  const double a = U.knots()[static_cast<std::size_t>(span)];
+  const double h = U.knots()[static_cast<std::size_t>(span) + 1] - a;
+  const double inv_h = 1.0 / h;
+  const double t = (u - a) * inv_h, s = 1.0 - t;
+  // B^1 = (s, t); B^2 = (s·s, s·t + t·s, t·t); B^3 from B^2 likewise (B[d][i] = s·B[d−1][i] + t·B[d−1][i−1]).
+  const double b20 = s * s, b21 = s * t + t * s, b22 = t * t;
+  ders[0] = s * b20;
+  ders[1] = s * b21 + t * b20;
+  ders[2] = s * b22 + t * b21;
+  ders[3] = t * b22;
+  const double f1 = 3 * inv_h;
+  ders[4] = f1 * (0.0 - b20);
+  ders[5] = f1 * (b20 - b21);
+  ders[6] = f1 * (b21 - b22);
+  ders[7] = f1 * (b22 - 0.0);
+  const double f2 = 6 * (inv_h * inv_h);
+  ders[8] = f2 * ((0.0 - 2.0 * 0.0) + s);
+  ders[9] = f2 * ((0.0 - 2.0 * s) + t);
+  ders[10] = f2 * ((s - 2.0 * t) + 0.0);
+  ders[11] = f2 * ((t - 2.0 * 0.0) + 0.0);
+}
+
 void bernstein_derivatives(const KnotVector& U, int span, double u, int n, double* ders) {
   switch (U.degree()) {
     case 1: return bernstein_impl<1>(U, span, u, n, ders);
     case 2: return bernstein_impl<2>(U, span, u, n, ders);
-    case 3: return n == 2 ? bernstein_impl<3, 2>(U, span, u, n, ders) : bernstein_impl<3>(U, span, u, n, ders);
+    case 3: return n == 2 ? cubic_bernstein_d2(U, span, u, ders) : bernstein_impl<3>(U, span, u, n, ders);
     default: return bernstein_impl<0>(U, span, u, n, ders);
   }
 }

@@ -109,6 +109,23 @@ TEST(Basis, OnABezierSpanTheDerivativesAreTheCubicBernsteinOnes) {
   }
 }
 
+// The cubic Bézier span's values and derivatives to second order written out (the closest-point search's Newton) are
+// the Bernstein triangle's numbers bit for bit: against the triangle's own values and first derivatives (asked for
+// alone, n = 1, it still runs the triangle).
+TEST(Basis, OnABezierSpanTheWrittenOutCubicIsTheBernsteinTrianglesBitForBit) {
+  const KnotVector U({0, 0, 0, 0, 0.3, 0.3, 0.3, 1, 1, 1, 1}, 3);
+  std::mt19937_64 rng(29);
+  std::uniform_real_distribution<double> dist(0.0, 1.0);
+  for (int trial = 0; trial < 500; ++trial) {
+    const double u = trial == 0 ? 0.0 : trial == 1 ? 1.0 : trial == 2 ? 0.3 : dist(rng);
+    const int span = U.find_span(u);
+    double d2[3 * (kMaxDegree + 1)], d1[2 * (kMaxDegree + 1)];
+    basis_function_derivatives(U, span, u, 2, d2);
+    basis_function_derivatives(U, span, u, 1, d1);
+    for (int j = 0; j < 8; ++j) EXPECT_EQ(d2[j], d1[j]) << "u " << u << " entry " << j;
+  }
+}
+
 TEST(Basis, OrdersAboveTheDegreeAreZero) {
   const KnotVector U = KnotVector::uniform(1, 3);
   double ders[3 * (kMaxDegree + 1)];
