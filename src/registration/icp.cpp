@@ -7,11 +7,13 @@
 #include <Eigen/SVD>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <array>
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -512,8 +514,12 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
   }
   RegistrationOptions coarse_options = options;
   coarse_options.criteria.relative_motion_tolerance *= kCoarseToleranceFactor;
-  const RegistrationResult coarse =
-      iterate(model, subset, coarse_options, {}, subset_offsets, kCoarseReachFactor * kSlideReach);
+  // The subset's k-d tree (for the hints below) is built while the coarse stage runs: it needs only the points.
+  RegistrationResult coarse;
+  std::unique_ptr<geometry::OwnedPointTree> near_tree;
+  tbb::parallel_invoke(
+      [&] { coarse = iterate(model, subset, coarse_options, {}, subset_offsets, kCoarseReachFactor * kSlideReach); },
+      [&] { near_tree = std::make_unique<geometry::OwnedPointTree>(std::vector<Point3>(subset)); });
   if (coarse.status == Status::TooFewPoints || coarse.status == Status::NumericalError) {
     return iterate(model, machine_points, options, {}, offsets);
   }
@@ -537,7 +543,7 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
     if (!(det > 1e-12 * JtJ(0, 0) * JtJ(1, 1))) return;  // tangents (nearly) parallel: no first-order move
     to_parameters[k] = JtJ.inverse() * J.transpose() * to_cad_rotation;
   });
-  const geometry::OwnedPointTree near(std::move(subset));
+  const geometry::OwnedPointTree& near = *near_tree;
   std::vector<cad::ModelPoint> hints(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
