@@ -138,7 +138,8 @@ void gather_block(const std::vector<double>& Z, int b, const int* idx, int m, do
 }
 
 // As a full matrix–vector product: twice the products of the triangle's, but in vector registers, where the
-// triangle's are a chain of dependent additions (a bicubic row: about 130 ns that way, a few times less this way).
+// triangle's are a chain of dependent additions (a bicubic row: about 130 ns that way, a few times less this way;
+// bicubic rows now have their own form, below, and this serves the biquadratic ones).
 template <int M>
 double fixed_quadratic_form(const double* block, const double* r) {
   const Eigen::Map<const Eigen::Matrix<double, M, M>> B(block);

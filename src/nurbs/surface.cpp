@@ -48,12 +48,15 @@ namespace {
 
 // Derivatives A[k][l] = ∂^{k+l} Sw / ∂u^k ∂v^l of the homogeneous surface for k + l <= D (A3.6).
 // Summing each row of the net over v first and then the rows over u costs (p+1)(q+1)(D+1) + (p+1)·#(k,l)
-// four-vector operations instead of (p+1)(q+1)·#(k,l). P, Q > 0 are the degrees fixed at compile time (bicubic:
-// the closest-point Newton's surfaces), so that the loops unroll; 0 reads them at run time. The arithmetic and its
-// order are the same either way: the results are bit-identical.
+// four-vector operations instead of (p+1)(q+1)·#(k,l). P, Q > 0 are the degrees fixed at compile time, so that the
+// loops unroll; called with 0, a bicubic surface (the closest-point Newton's) is passed on to <D, 3, 3> and any other
+// reads its degrees at run time. The arithmetic and its order are the same either way: the results are bit-identical.
 template <int D, int P = 0, int Q = 0>
 void homogeneous_derivatives(const Surface& s, double u, double v, HomogeneousPoint (&A)[D + 1][D + 1],
                              KnotSpans spans = {}) {
+  if constexpr (P == 0 && Q == 0) {
+    if (s.p() == 3 && s.q() == 3) return homogeneous_derivatives<D, 3, 3>(s, u, v, A, spans);
+  }
   const int p = P > 0 ? P : s.p();
   const int q = Q > 0 ? Q : s.q();
   const Domain dom = s.domain();
@@ -140,11 +143,7 @@ Point3 evaluate(const Surface& s, double u, double v, KnotSpans spans) {
 
 SurfaceD1 derivatives_d1(const Surface& s, double u, double v) {
   HomogeneousPoint A[2][2];
-  if (s.p() == 3 && s.q() == 3) {
-    homogeneous_derivatives<1, 3, 3>(s, u, v, A);
-  } else {
-    homogeneous_derivatives<1>(s, u, v, A);
-  }
+  homogeneous_derivatives<1>(s, u, v, A);
   const double w = A[0][0].w();
   SurfaceD1 r;
   r.S = A[0][0].head<3>() / w;
@@ -155,11 +154,7 @@ SurfaceD1 derivatives_d1(const Surface& s, double u, double v) {
 
 SurfaceD2 derivatives_d2(const Surface& s, double u, double v, KnotSpans spans) {
   HomogeneousPoint A[3][3];
-  if (s.p() == 3 && s.q() == 3) {
-    homogeneous_derivatives<2, 3, 3>(s, u, v, A, spans);
-  } else {
-    homogeneous_derivatives<2>(s, u, v, A, spans);
-  }
+  homogeneous_derivatives<2>(s, u, v, A, spans);
   return rational_derivatives(s, A, 2);
 }
 
