@@ -131,10 +131,6 @@ void check_file_frame(const std::filesystem::path& path, Format format) {
     if (first.size() < 73 || (first[72] != 'S' && first[72] != 'G')) fail(path, "not an IGES file (no start section)");
     const std::string last = last_line();
     if (last.size() < 73 || last[72] != 'T') fail(path, "truncated IGES file (no terminate section at the end)");
-    // Counts beyond what the file holds would have OpenCASCADE allocate for them (cad/iges_counts.hpp).
-    in.clear();
-    in.seekg(0);
-    if (std::optional<std::string> r = iges_count_beyond_data(in)) fail(path, *r + ": the file is damaged");
   }
 }
 
@@ -409,6 +405,11 @@ ExchangeRead read_exchange_file(const std::filesystem::path& path, Format format
   XSControl_Reader& reader = step ? static_cast<XSControl_Reader&>(*step) : *iges;
   try {
     OCC_CATCH_SIGNALS
+    // Counts beyond what the file holds would have OpenCASCADE allocate for them (cad/iges_counts.hpp). Its lexer
+    // runs here, under the exchange lock and the crash guard, as it does again inside ReadFile.
+    if (iges) {
+      if (std::optional<std::string> r = iges_count_beyond_data(path)) fail(path, *r + ": the file is damaged");
+    }
     if (reader.ReadFile(path.c_str()) != IFSelect_RetDone) {
       fail(path, format == Format::Step ? "OpenCASCADE cannot read it as STEP" : "OpenCASCADE cannot read it as IGES");
     }
