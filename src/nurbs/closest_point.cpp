@@ -3,6 +3,10 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -342,6 +346,13 @@ float float_below(double x) {
   return static_cast<double>(f) > x ? std::nextafter(f, -inf) : f;
 }
 float float_above(double x) { return -float_below(-x); }
+// The query rounded to floats both ways, for lower bounds on its distance to boxes stored in floats.
+struct QueryInFloats {
+  explicit QueryInFloats(const Point3& q)
+      : up{float_above(q.x()), float_above(q.y()), float_above(q.z())},
+        down{float_below(q.x()), float_below(q.y()), float_below(q.z())} {}
+  float up[3], down[3];
+};
 // Three floats as doubles (exactly).
 Vector3 widened(const float (&a)[3]) { return {a[0], a[1], a[2]}; }
 
@@ -399,23 +410,19 @@ struct alignas(64) CellBox {
     }
   }
 
-  [[nodiscard]] double lower_bound(const Vector3& q_minus_c) const {
+  // Whether the cell may hold a point nearer to q than `distance` that is a minimum of the distance to q.
+  // Nearer: the distance to the box (along the rounded frame, whose stretch the slack allows for) is below it.
+  // A minimum: a critical point (q − x parallel to the normal at x), given that every normal of the cell is within
+  // the angle atan(cone_tan) of n; at such a point the component of q − x across n is at most cone_tan times its
+  // component along n, and over the box the first is at least the tangential gap, the second at most the farther of
+  // the box's two faces.
+  [[nodiscard]] bool may_hold_closer_point(const Vector3& q_minus_c, double distance) const {
     const Eigen::Array3d x = coordinates(q_minus_c);
     const Eigen::Array3d gap = (widened(lo).array() - x).max(x - widened(hi).array()).max(0.0);
-    return std::sqrt(gap.square().sum()) / (1.0 + kFrameSlack);
-  }
-
-  // Whether the cell can hold a critical point of the distance (q − x parallel to the normal at x), given that
-  // every normal of the cell is within the angle atan(cone_tan) of n: at such a point the component of q − x
-  // across n is at most cone_tan times its component along n, and over the box the first is at least the
-  // tangential gap, the second at most the farther of the box's two faces.
-  [[nodiscard]] bool may_hold_critical_point(const Vector3& q_minus_c) const {
+    if (!(std::sqrt(gap.square().sum()) < distance * (1.0 + kFrameSlack))) return false;
     if (!(cone_tan < std::numeric_limits<float>::infinity())) return true;
-    const Eigen::Array3d x = coordinates(q_minus_c);
-    const double g1 = std::max({lo[0] - x[0], x[0] - hi[0], 0.0});
-    const double g2 = std::max({lo[1] - x[1], x[1] - hi[1], 0.0});
     const double height = std::max(std::abs(x[2] - lo[2]), std::abs(x[2] - hi[2]));
-    return std::sqrt(g1 * g1 + g2 * g2) <= cone_tan * height + kCellBoundFloor;
+    return std::sqrt(gap[0] * gap[0] + gap[1] * gap[1]) <= cone_tan * height + kCellBoundFloor;
   }
 };
 static_assert(sizeof(CellBox) == 64);
@@ -460,15 +467,47 @@ struct ClosestPointSolver::Seeds {
   std::vector<CellBox> box;
   // A bounding-volume hierarchy over the cells, built on the parameter grid: halving the longer of the two index
   // ranges keeps every node a compact piece of the surface. A leaf is a block of up to 2 × 2 cells (two levels fewer
-  // to walk than one cell a leaf: 12–20 % faster queries on the panel benchmark). An inner node holds its two
-  // children's axis-aligned boxes, in floats rounded outwards (a box only grows, so its distance stays a lower
-  // bound): a step down the tree reads one cache line, where a node holding its own box in doubles took three (the
-  // node and both children). Queries in random order miss the cache at nearly every step.
+  // to walk than one cell a leaf: 12–20 % faster queries on the panel benchmark). An inner node holds up to four
+  // children (two halvings at once) and their axis-aligned boxes, in floats rounded outwards (a box only grows, so
+  // its distance stays a lower bound), axis by axis so that one SSE operation takes all four: half the levels of a
+  // binary hierarchy to walk, each two adjacent cache lines. Queries in random order miss the cache at nearly every
+  // step.
+  static constexpr int kFanOut = 4;
   struct alignas(64) Node {
-    float lo[2][3], hi[2][3];  // the children's boxes: empty (lo = +inf) where no cell of the child meets the region
-    std::int64_t child[2];     // an inner node's index, or a leaf's cells as leaf_ref() encodes them
+    float lo[3][kFanOut], hi[3][kFanOut];  // the children's boxes by axis: empty (lo = +inf, hi = −inf) where no
+                                           // cell of the child meets the region, and in unused slots
+    std::int64_t child[kFanOut];           // an inner node's index, or a leaf's cells as leaf_ref() encodes them
   };
   std::vector<Node> nodes;
+  // Lower bounds on the squared distances from the query to a node's four child boxes, in single precision: the gaps
+  // are taken from the query rounded towards the box (lo − up ≤ lo − q, down − hi ≤ q − hi), and the rounding of the
+  // float subtractions, squares and sums (each at most 2⁻²⁴ relative, five on a path) is taken back by a factor
+  // 1 − 2⁻²⁰ (also rounded: the product stays below the exact sum). An empty slot (lo = +inf) is infinitely far.
+  // The four lanes in one SSE register where there is one (x86-64 always has SSE2).
+  static std::array<float, kFanOut> children_distance_sq(const Node& node, const QueryInFloats& q) {
+    constexpr float kShrink = 1.0f - 0x1p-20f;
+    std::array<float, kFanOut> sum{};
+#if defined(__SSE2__)
+    static_assert(kFanOut == 4);
+    __m128 s = _mm_setzero_ps();
+    for (int x = 0; x < 3; ++x) {
+      const __m128 below = _mm_sub_ps(_mm_load_ps(node.lo[x]), _mm_set1_ps(q.up[x]));
+      const __m128 above = _mm_sub_ps(_mm_set1_ps(q.down[x]), _mm_load_ps(node.hi[x]));
+      const __m128 gap = _mm_max_ps(_mm_max_ps(below, above), _mm_setzero_ps());
+      s = _mm_add_ps(s, _mm_mul_ps(gap, gap));
+    }
+    _mm_storeu_ps(sum.data(), _mm_mul_ps(s, _mm_set1_ps(kShrink)));
+#else
+    for (int x = 0; x < 3; ++x) {
+      for (std::size_t c = 0; c < kFanOut; ++c) {
+        const float gap = std::max(std::max(node.lo[x][c] - q.up[x], q.down[x] - node.hi[x][c]), 0.0f);
+        sum[c] += gap * gap;
+      }
+    }
+    for (float& v : sum) v *= kShrink;
+#endif
+    return sum;
+  }
 
   // A leaf as a negative reference: its first cell (lowest u and v) and its block of cells_u × cells_v ≤ 2 × 2.
   static std::int64_t leaf_ref(std::size_t cell, int cells_u, int cells_v) {
@@ -508,28 +547,45 @@ struct ClosestPointSolver::Seeds {
       if (!leaf.meets) leaf.lo = Eigen::Array3d::Constant(inf), leaf.hi = Eigen::Array3d::Constant(-inf);
       return leaf;
     }
-    const std::size_t at = nodes.size();
-    nodes.emplace_back();
-    Built l, r;
-    if (i1 - i0 >= j1 - j0) {
-      const int mid = (i0 + i1) / 2;
-      l = build(i0, mid, j0, j1, leaf_lo, leaf_hi);
-      r = build(mid, i1, j0, j1, leaf_lo, leaf_hi);
-    } else {
-      const int mid = (j0 + j1) / 2;
-      l = build(i0, i1, j0, mid, leaf_lo, leaf_hi);
-      r = build(i0, i1, mid, j1, leaf_lo, leaf_hi);
-    }
-    Node& node = nodes[at];
-    for (int c = 0; c < 2; ++c) {
-      const Built& b = c == 0 ? l : r;
-      node.child[c] = b.ref;
-      for (int x = 0; x < 3; ++x) {
-        node.lo[c][x] = float_below(b.lo[x]);
-        node.hi[c][x] = float_above(b.hi[x]);
+    // Two halvings, the longer index range first each time; a half already of leaf size is a child as it is.
+    struct Range {
+      int i0, i1, j0, j1;
+    };
+    auto is_leaf = [](const Range& r) { return r.i1 - r.i0 <= 2 && r.j1 - r.j0 <= 2; };
+    auto halves = [](const Range& r) {
+      if (r.i1 - r.i0 >= r.j1 - r.j0) {
+        const int mid = (r.i0 + r.i1) / 2;
+        return std::array<Range, 2>{Range{r.i0, mid, r.j0, r.j1}, Range{mid, r.i1, r.j0, r.j1}};
+      }
+      const int mid = (r.j0 + r.j1) / 2;
+      return std::array<Range, 2>{Range{r.i0, r.i1, r.j0, mid}, Range{r.i0, r.i1, mid, r.j1}};
+    };
+    Range children[kFanOut];
+    int count = 0;
+    for (const Range& h : halves({i0, i1, j0, j1})) {
+      if (is_leaf(h)) {
+        children[count++] = h;
+      } else {
+        for (const Range& g : halves(h)) children[count++] = g;
       }
     }
-    return {static_cast<std::int64_t>(at), l.lo.min(r.lo), l.hi.max(r.hi), l.meets || r.meets};
+    const std::size_t at = nodes.size();
+    nodes.emplace_back();
+    Built all{static_cast<std::int64_t>(at), Eigen::Array3d::Constant(inf), Eigen::Array3d::Constant(-inf), false};
+    for (int c = 0; c < kFanOut; ++c) {
+      Built b{0, Eigen::Array3d::Constant(inf), Eigen::Array3d::Constant(-inf), false};
+      if (c < count) b = build(children[c].i0, children[c].i1, children[c].j0, children[c].j1, leaf_lo, leaf_hi);
+      Node& node = nodes[at];  // build() may have moved the nodes
+      node.child[c] = b.ref;
+      for (int x = 0; x < 3; ++x) {
+        node.lo[x][c] = float_below(b.lo[x]);
+        node.hi[x][c] = float_above(b.hi[x]);
+      }
+      all.lo = all.lo.min(b.lo);
+      all.hi = all.hi.max(b.hi);
+      all.meets = all.meets || b.meets;
+    }
+    return all;
   }
 };
 
@@ -769,9 +825,6 @@ inline double box_distance_sq(const Point3& q, const Eigen::Array3d& lo, const E
   const Eigen::Array3d x = q.array();
   return (lo - x).max(x - hi).max(0.0).square().sum();
 }
-inline double box_distance_sq(const Point3& q, const float (&lo)[3], const float (&hi)[3]) {
-  return box_distance_sq(q, widened(lo).array(), widened(hi).array());
-}
 
 }  // namespace
 
@@ -890,39 +943,46 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   stack.clear();
   double bound_sq = best.distance * best.distance;
   const int nv_cells = sd.axis_v.count();
+  const QueryInFloats near(query);
   if (sd.root.meets) stack.emplace_back(box_distance_sq(query, sd.root.lo, sd.root.hi), sd.root.ref);
   while (!stack.empty()) {
-    const auto [lower_sq, ref] = stack.back();
+    auto [lower_sq, ref] = stack.back();
     stack.pop_back();
     if (lower_sq >= bound_sq) continue;  // the bound has shrunk since the node was pushed
-    if (ref < 0) {
-      const Seeds::Leaf leaf = Seeds::leaf(ref);
-      for (int a = 0; a < leaf.cells_u; ++a)
-        for (int b = 0; b < leaf.cells_v; ++b) {
-          const std::uint32_t k = leaf.cell + static_cast<std::uint32_t>(a * nv_cells + b);
-          const Seeds::Cell& c = sd.cell[k];
-          if (!c.in_region) continue;
-          const double seed_sq = (query - c.seed).squaredNorm();
-          if (c.on_face && seed_sq < bound_sq) {
-            bound_sq = seed_sq;
-            // The nearest seed's cell is searched first, from its stored derivatives: ask for them while the pass
-            // goes on (queries in random order find them outside the cache: 3–5 % of the query's time).
-            __builtin_prefetch(&sd.start[k]);
-          }
-          candidates.emplace_back(seed_sq, k);
+    // Down the tree: the nearest child nearer than the bound is walked next, its siblings nearer than the bound are
+    // pushed farthest first (ties in slot order: the order depends on the query alone).
+    while (ref >= 0) {
+      const Seeds::Node& node = sd.nodes[static_cast<std::size_t>(ref)];
+      const std::array<float, Seeds::kFanOut> d = Seeds::children_distance_sq(node, near);
+      Entry passed[Seeds::kFanOut];
+      int count = 0;
+      for (int c = 0; c < Seeds::kFanOut; ++c) {
+        const double dc = d[static_cast<std::size_t>(c)];
+        if (!(dc < bound_sq)) continue;
+        int at = count++;
+        for (; at > 0 && passed[at - 1].first < dc; --at) passed[at] = passed[at - 1];
+        passed[at] = {dc, node.child[c]};
+      }
+      if (count == 0) break;
+      stack.insert(stack.end(), passed, passed + count - 1);
+      ref = passed[count - 1].second;
+    }
+    if (ref >= 0) continue;
+    const Seeds::Leaf leaf = Seeds::leaf(ref);
+    for (int a = 0; a < leaf.cells_u; ++a)
+      for (int b = 0; b < leaf.cells_v; ++b) {
+        const std::uint32_t k = leaf.cell + static_cast<std::uint32_t>(a * nv_cells + b);
+        const Seeds::Cell& c = sd.cell[k];
+        if (!c.in_region) continue;
+        const double seed_sq = (query - c.seed).squaredNorm();
+        if (c.on_face && seed_sq < bound_sq) {
+          bound_sq = seed_sq;
+          // The nearest seed's cell is searched first, from its stored derivatives: ask for them while the pass
+          // goes on (queries in random order find them outside the cache: 3–5 % of the query's time).
+          __builtin_prefetch(&sd.start[k]);
         }
-      continue;
-    }
-    const Seeds::Node& node = sd.nodes[static_cast<std::size_t>(ref)];
-    const double dl = box_distance_sq(query, node.lo[0], node.hi[0]);
-    const double dr = box_distance_sq(query, node.lo[1], node.hi[1]);
-    if (dl <= dr) {
-      if (dr < bound_sq) stack.emplace_back(dr, node.child[1]);
-      if (dl < bound_sq) stack.emplace_back(dl, node.child[0]);
-    } else {
-      if (dl < bound_sq) stack.emplace_back(dl, node.child[0]);
-      if (dr < bound_sq) stack.emplace_back(dr, node.child[1]);
-    }
+        candidates.emplace_back(seed_sq, k);
+      }
   }
   // Nearest seed first: without a bound its cell is searched whatever its tests, and its point bounds the rest;
   // after it, in the order gathered, a cell is searched only if its oriented box is nearer than the best point
@@ -943,7 +1003,7 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   auto may_hold_closer = [&](double seed_sq, std::uint32_t k) {
     if (std::sqrt(seed_sq) - sd.cell[k].reach >= best.distance) return false;
     const Vector3 q_minus_c = query - sd.cell[k].seed;
-    return sd.box[k].lower_bound(q_minus_c) < best.distance && sd.box[k].may_hold_critical_point(q_minus_c);
+    return sd.box[k].may_hold_closer_point(q_minus_c, best.distance);
   };
   for (const auto& [seed_sq, k] : candidates) {
     if (static_cast<long>(k) == skip) continue;
