@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -88,7 +89,7 @@ struct Hessian {
   double Juu, Juv, Jvv, Huu, Huv, Hvv;
 };
 
-Hessian hessian(const Iterate& it) {
+[[gnu::always_inline]] inline Hessian hessian(const Iterate& it) {
   const auto& d = it.d;
   const double Juu = d.Su.dot(d.Su), Juv = d.Su.dot(d.Sv), Jvv = d.Sv.dot(d.Sv);
   return {Juu, Juv, Jvv, Juu + it.r.dot(d.Suu), Juv + it.r.dot(d.Suv), Jvv + it.r.dot(d.Svv)};
@@ -106,7 +107,7 @@ double flatness(const Hessian& h) {
 
 // Newton step on the free parameters; Gauss–Newton (Hessian without the curvature terms, always positive
 // semi-definite) where the full Hessian is not positive definite, e.g. far from a concave region's centre.
-std::array<double, 2> newton_step(const Hessian& h, double gu, double gv, ActiveSet active) {
+[[gnu::always_inline]] inline std::array<double, 2> newton_step(const Hessian& h, double gu, double gv, ActiveSet active) {
   const auto [Juu, Juv, Jvv, Huu, Huv, Hvv] = h;
   auto solve1 = [](double h, double j, double g) {
     if (h > 0.0) return -g / h;
@@ -221,11 +222,18 @@ ClosestPointResult refine_in(const Surface& s, const Point3& P, double u0, doubl
     h = hessian(it);
     have_h = true;
     auto [du, dv] = newton_step(h, gu, gv, active);
-    const double predicted = (du * it.d.Su + dv * it.d.Sv).norm();
-    const bool next_below_tolerance =
-        predicted < kClosestPointStepTolerance ||
-        (previous_step > 0.0 && predicted <= kMaxPredictedLastStep &&
-         predicted * predicted * predicted <= kPredictedErrorFraction * kClosestPointStepTolerance * previous_step * previous_step);
+    // The predicted step's length decides only when it is at most kMaxPredictedLastStep (the larger tolerance):
+    // its square root is taken only then (its square a little above that bound's, so that no rounding of the root
+    // could have decided otherwise).
+    const double predicted_sq = (du * it.d.Su + dv * it.d.Sv).squaredNorm();
+    bool next_below_tolerance = false;
+    if (predicted_sq <= 1.001 * kMaxPredictedLastStep * kMaxPredictedLastStep) {
+      const double predicted = std::sqrt(predicted_sq);
+      next_below_tolerance =
+          predicted < kClosestPointStepTolerance ||
+          (previous_step > 0.0 && predicted <= kMaxPredictedLastStep &&
+           predicted * predicted * predicted <= kPredictedErrorFraction * kClosestPointStepTolerance * previous_step * previous_step);
+    }
     if (next_below_tolerance && !it.approximate && it.d.Suu.allFinite() && it.d.Suv.allFinite() &&
         it.d.Svv.allFinite()) {
       // The last, tiny step is taken without the derivatives it would need only to start another: Newton's
@@ -343,7 +351,12 @@ float float_below(double x) {
   if (x > top) return std::numeric_limits<float>::max();
   if (x < -top) return -inf;
   const float f = static_cast<float>(x);
-  return static_cast<double>(f) > x ? std::nextafter(f, -inf) : f;
+  if (!(static_cast<double>(f) > x)) return f;
+  // The float before f, as std::nextafter(f, −inf) gives it, without the library call (six a query): f is finite
+  // here, and −FLT_MAX only where x is below it, which returned above.
+  if (f == 0.0f) return -std::numeric_limits<float>::denorm_min();
+  const std::uint32_t bits = std::bit_cast<std::uint32_t>(f);
+  return std::bit_cast<float>(f > 0.0f ? bits - 1 : bits + 1);
 }
 float float_above(double x) { return -float_below(-x); }
 // The query rounded to floats both ways, for lower bounds on its distance to boxes stored in floats.
@@ -944,6 +957,8 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   double bound_sq = best.distance * best.distance;
   const int nv_cells = sd.axis_v.count();
   const QueryInFloats near(query);
+  constexpr std::size_t npos = std::numeric_limits<std::size_t>::max();
+  std::size_t nearest = npos;  // the nearest candidate's index in `candidates`
   if (sd.root.meets) stack.emplace_back(box_distance_sq(query, sd.root.lo, sd.root.hi), sd.root.ref);
   while (!stack.empty()) {
     auto [lower_sq, ref] = stack.back();
@@ -981,6 +996,8 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
           // goes on (queries in random order find them outside the cache: 3–5 % of the query's time).
           __builtin_prefetch(&sd.start[k]);
         }
+        // The nearest candidate as std::min_element would pick it (the first of the least (distance, cell) pairs).
+        if (nearest == npos || Candidate{seed_sq, k} < candidates[nearest]) nearest = candidates.size();
         candidates.emplace_back(seed_sq, k);
       }
   }
@@ -988,9 +1005,7 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   // after it, in the order gathered, a cell is searched only if its oriented box is nearer than the best point
   // and its normals allow a critical point there (or it lies on an edge or a crease). The order depends on the
   // query alone.
-  if (!candidates.empty()) {
-    std::iter_swap(candidates.begin(), std::min_element(candidates.begin(), candidates.end()));
-  }
+  if (!candidates.empty()) std::swap(candidates.front(), candidates[nearest]);
   long skip = -1;
   if (known != nullptr && known->ok()) {
     // Newton's own flatness when it found the known point (one evaluation fewer for every hinted exact search).
@@ -1001,7 +1016,12 @@ ClosestPointResult ClosestPointSolver::closest_point(const Point3& query, const 
   // The seed's distance less the cell's reach is a looser bound than the oriented box's, but needs nothing more
   // read from memory: it turns candidates away before their boxes are loaded.
   auto may_hold_closer = [&](double seed_sq, std::uint32_t k) {
-    if (std::sqrt(seed_sq) - sd.cell[k].reach >= best.distance) return false;
+    // √seed_sq − reach ≥ best: decided on the squares where they lie more than a relative 1e-14 apart (far
+    // beyond the roundings of either form, so the answer is the same), the root taken only in between.
+    const double reach = sd.cell[k].reach;
+    const double edge = best.distance + reach;
+    if (seed_sq > edge * edge * (1.0 + 1e-14)) return false;
+    if (!(seed_sq < edge * edge * (1.0 - 1e-14)) && std::sqrt(seed_sq) - reach >= best.distance) return false;
     const Vector3 q_minus_c = query - sd.cell[k].seed;
     return sd.box[k].may_hold_closer_point(q_minus_c, best.distance);
   };
