@@ -114,19 +114,8 @@ void derivatives_impl(const KnotVector& U, int span, double u, int n_runtime, do
 // On a Bézier span (its p knots on each side all equal to its ends, as after refinement to Bézier form) the basis
 // functions are the Bernstein polynomials of t = (u − a)/(b − a): from the triangle B^d_i = (1−t) B^{d−1}_i +
 // t B^{d−1}_{i−1}, the k-th derivative is p!/(p−k)!/(b−a)^k times the k-th difference of B^{p−k} (The NURBS Book
-// eqs. 1.7, 1.9). A fraction of A2.3's work, for the closest-point search, which evaluates only Bézier spans.
-bool is_bezier_span(const KnotVector& U, int span) {
-  const int p = U.degree();
-  const auto& k = U.knots();
-  for (int i = 1; i < p; ++i) {
-    if (k[static_cast<std::size_t>(span - i)] != k[static_cast<std::size_t>(span)] ||
-        k[static_cast<std::size_t>(span + 1 + i)] != k[static_cast<std::size_t>(span + 1)]) {
-      return false;
-    }
-  }
-  return true;
-}
-
+// eqs. 1.7, 1.9). A fraction of A2.3's work, for the closest-point search, which evaluates only Bézier spans
+// (detail::is_bezier_span, basis.hpp).
 template <int P, int N = -1>
 void bernstein_impl(const KnotVector& U, int span, double u, int n_runtime, double* ders) {
   const int n = N >= 0 ? N : n_runtime;
@@ -156,45 +145,19 @@ void bernstein_impl(const KnotVector& U, int span, double u, int n_runtime, doub
   }
 }
 
-// bernstein_impl<3> with n = 2 written out: the same products and sums (the triangle's terms with a zero, s·0 and
-// t·0, left out: for t in [0, 1] they add exactly nothing), without its zeroed table and loops. The closest-point
-// search's Newton evaluates this twice a step.
-void cubic_bernstein_d2(const KnotVector& U, int span, double u, double* ders) {
-  const double a = U.knots()[static_cast<std::size_t>(span)];
-  const double h = U.knots()[static_cast<std::size_t>(span) + 1] - a;
-  const double inv_h = 1.0 / h;
-  const double t = (u - a) * inv_h, s = 1.0 - t;
-  // B^1 = (s, t); B^2 = (s·s, s·t + t·s, t·t); B^3 from B^2 likewise (B[d][i] = s·B[d−1][i] + t·B[d−1][i−1]).
-  const double b20 = s * s, b21 = s * t + t * s, b22 = t * t;
-  ders[0] = s * b20;
-  ders[1] = s * b21 + t * b20;
-  ders[2] = s * b22 + t * b21;
-  ders[3] = t * b22;
-  const double f1 = 3 * inv_h;
-  ders[4] = f1 * (0.0 - b20);
-  ders[5] = f1 * (b20 - b21);
-  ders[6] = f1 * (b21 - b22);
-  ders[7] = f1 * (b22 - 0.0);
-  const double f2 = 6 * (inv_h * inv_h);
-  ders[8] = f2 * ((0.0 - 2.0 * 0.0) + s);
-  ders[9] = f2 * ((0.0 - 2.0 * s) + t);
-  ders[10] = f2 * ((s - 2.0 * t) + 0.0);
-  ders[11] = f2 * ((t - 2.0 * 0.0) + 0.0);
-}
-
 void bernstein_derivatives(const KnotVector& U, int span, double u, int n, double* ders) {
   switch (U.degree()) {
     case 1: return bernstein_impl<1>(U, span, u, n, ders);
     case 2: return bernstein_impl<2>(U, span, u, n, ders);
-    case 3: return n == 2 ? cubic_bernstein_d2(U, span, u, ders) : bernstein_impl<3>(U, span, u, n, ders);
+    case 3: return n == 2 ? detail::cubic_bernstein_d2(U, span, u, ders) : bernstein_impl<3>(U, span, u, n, ders);
     default: return bernstein_impl<0>(U, span, u, n, ders);
   }
 }
 
 }  // namespace
 
-void basis_function_derivatives(const KnotVector& U, int span, double u, int n, double* ders) {
-  if (n <= 2 && is_bezier_span(U, span)) return bernstein_derivatives(U, span, u, n, ders);
+void detail::basis_function_derivatives_any(const KnotVector& U, int span, double u, int n, double* ders) {
+  if (n <= 2 && detail::is_bezier_span(U, span)) return bernstein_derivatives(U, span, u, n, ders);
   switch (U.degree()) {
     case 1: return derivatives_impl<1>(U, span, u, n, ders);
     case 2: return derivatives_impl<2>(U, span, u, n, ders);

@@ -874,7 +874,7 @@ void ClosestPointSolver::search_cell(const Point3& query, std::uint32_t k, int p
   }
 }
 
-void ClosestPointSolver::search_box(const Point3& query, const Domain& box, KnotSpans spans, const SurfaceD2* start,
+[[gnu::always_inline]] inline void ClosestPointSolver::search_box(const Point3& query, const Domain& box, KnotSpans spans, const SurfaceD2* start,
                                     Search& search) const {
   const Domain whole = surface_.domain();
   double flat = 1.0;
