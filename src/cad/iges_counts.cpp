@@ -259,7 +259,13 @@ std::optional<std::string> iges_count_beyond_data(const std::filesystem::path& p
   if (read != 0) return std::nullopt;
   int parts = 0, parameters = 0;
   iges_stats(&parts, &parameters);
-  Entity e;
+  // Thread-local rather than on this frame: should the lexer's lists crash the walk, the jump back to the caller
+  // skips this frame's destructors, and a vector of this frame would be lost (a leak to LeakSanitizer's fuzzing).
+  thread_local Entity e;
+  struct Release {
+    Entity& e;
+    ~Release() { e.integers = {}; }  // the largest entity's values are not kept between files
+  } release{e};
   for (int k = 0; k < parts; ++k) {
     int* directory = nullptr;
     char *res1 = nullptr, *res2 = nullptr, *label = nullptr, *subscript = nullptr;
