@@ -149,7 +149,8 @@ void bernstein_derivatives(const KnotVector& U, int span, double u, int n, doubl
   switch (U.degree()) {
     case 1: return bernstein_impl<1>(U, span, u, n, ders);
     case 2: return bernstein_impl<2>(U, span, u, n, ders);
-    case 3: return n == 2 ? detail::cubic_bernstein_d2(U, span, u, ders) : bernstein_impl<3>(U, span, u, n, ders);
+    // A cubic with n = 2 is taken by basis_function_derivatives itself (detail::cubic_bernstein_d2, basis.hpp).
+    case 3: return bernstein_impl<3>(U, span, u, n, ders);
     default: return bernstein_impl<0>(U, span, u, n, ders);
   }
 }
