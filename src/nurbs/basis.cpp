@@ -145,7 +145,9 @@ void bernstein_impl(const KnotVector& U, int span, double u, int n_runtime, doub
   }
 }
 
-void bernstein_derivatives(const KnotVector& U, int span, double u, int n, double* ders) {
+}  // namespace
+
+void detail::bezier_span_derivatives(const KnotVector& U, int span, double u, int n, double* ders) {
   switch (U.degree()) {
     case 1: return bernstein_impl<1>(U, span, u, n, ders);
     case 2: return bernstein_impl<2>(U, span, u, n, ders);
@@ -155,10 +157,7 @@ void bernstein_derivatives(const KnotVector& U, int span, double u, int n, doubl
   }
 }
 
-}  // namespace
-
-void detail::basis_function_derivatives_any(const KnotVector& U, int span, double u, int n, double* ders) {
-  if (n <= 2 && detail::is_bezier_span(U, span)) return bernstein_derivatives(U, span, u, n, ders);
+void detail::basis_function_derivatives_a23(const KnotVector& U, int span, double u, int n, double* ders) {
   switch (U.degree()) {
     case 1: return derivatives_impl<1>(U, span, u, n, ders);
     case 2: return derivatives_impl<2>(U, span, u, n, ders);

@@ -53,16 +53,22 @@ inline void cubic_bernstein_d2(const KnotVector& U, int span, double u, double* 
   ders[11] = f2 * ((t - 2.0 * 0.0) + 0.0);
 }
 
-// basis_function_derivatives for any degree and span (basis.cpp).
-void basis_function_derivatives_any(const KnotVector& U, int span, double u, int n, double* ders);
+// basis_function_derivatives on a Bézier span, n ≤ 2, any degree: the Bernstein triangle (basis.cpp).
+void bezier_span_derivatives(const KnotVector& U, int span, double u, int n, double* ders);
+// basis_function_derivatives by A2.3, for any span (basis.cpp).
+void basis_function_derivatives_a23(const KnotVector& U, int span, double u, int n, double* ders);
 
 }  // namespace detail
 
 // A2.3: derivatives of order 0..n of the same p+1 functions; ders[k*(p+1) + j] = N^(k)_{span-p+j,p}(u).
 // Orders above p are zero. n is at most 2 here (all the kernel needs) and at most kMaxDegree in general.
+// A Bézier span (n ≤ 2) takes the Bernstein form, decided here once for either path.
 inline void basis_function_derivatives(const KnotVector& U, int span, double u, int n, double* ders) {
-  if (n == 2 && U.degree() == 3 && detail::is_bezier_span(U, span)) return detail::cubic_bernstein_d2(U, span, u, ders);
-  detail::basis_function_derivatives_any(U, span, u, n, ders);
+  if (n <= 2 && detail::is_bezier_span(U, span)) {
+    if (n == 2 && U.degree() == 3) return detail::cubic_bernstein_d2(U, span, u, ders);
+    return detail::bezier_span_derivatives(U, span, u, n, ders);
+  }
+  detail::basis_function_derivatives_a23(U, span, u, n, ders);
 }
 
 }  // namespace probecomp::nurbs
