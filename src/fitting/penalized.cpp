@@ -251,6 +251,31 @@ Vector3 basis_row(const Surface& s, std::span<const Point3> net, const Ordering&
   return S0;
 }
 
+// Points the cross-validation score is summed over at most.
+constexpr std::size_t kCvPoints = 16384;
+// The cross-validation takes every stride-th point: every point below 2·kCvPoints.
+std::size_t cv_stride(std::size_t n_points) { return std::max<std::size_t>(1, n_points / kCvPoints); }
+
+// The points the leave-one-out score is summed over, each with its basis row (the nonzero R_I and their unknowns)
+// and its offset from the start surface, y_k = x_k − S⁰(u_k, v_k): made once per fit, used by every trial λ.
+// Above kCvPoints points, every stride-th point (in input order, so the same points for every λ): each term is
+// exact for its point, so the sum over the sample estimates the whole sum without bias, at a bounded cost.
+// The rows are ordered by knot span (stably: the same order for any thread count), so that each trial reads the
+// band inverse once per span, not once per point.
+struct CvRows {
+  int m = 0;                 // basis functions per row, (p + 1)(q + 1)
+  std::vector<int> idx;      // m per row; idx[0] names the row's span (its first unknown)
+  std::vector<double> R;     // m per row
+  std::vector<Vector3> y;    // one per row
+  std::vector<double> w;     // one per row
+  // Each point's row, kNoRow for a point of weight 0, when the rows are those of every point (a stride of 1); else
+  // empty. The fit's assembly and its variance factors then take the rows made here instead of evaluating each
+  // point's basis again: the same numbers.
+  static constexpr std::uint32_t kNoRow = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> row_of_point;
+  [[nodiscard]] bool cover_every_point() const { return !row_of_point.empty(); }
+};
+
 // The data's normal equations for the displacement: AᵀWA, AᵀWy and yᵀWy with y_k = x_k − S⁰(u_k, v_k).
 struct DataTerms {
   Band AtWA;
@@ -260,9 +285,10 @@ struct DataTerms {
   int used = 0;
 };
 
+// `rows`, when given, cover every point and give each point's basis row and offset (else each is evaluated here).
 DataTerms assemble_data(const Surface& s, std::span<const Point3> net, const Ordering& order, int b,
                         std::span<const Point3> points, std::span<const SurfaceParameter> params,
-                        std::span<const double> weights) {
+                        std::span<const double> weights, const CvRows* rows) {
   const int n = s.num_u() * s.num_v();
   const int p = s.p(), q = s.q();
   const std::size_t n_points = points.size();
@@ -279,14 +305,14 @@ DataTerms assemble_data(const Surface& s, std::span<const Point3> net, const Ord
     t.AtWA = Band(n, b);
     t.AtWy.assign(static_cast<std::size_t>(n) * 3, 0.0);
     RationalBasis rb;
-    int idx[kMaxRow];
+    int own_idx[kMaxRow];
     const int m = (p + 1) * (q + 1);
     double block[kMaxRow * kMaxRow];  // block[x·m + y], y ≤ x: Σ w R_x R_y over the run
     double block_y[kMaxRow * 3];      // Σ w R_x y
     int run_idx[kMaxRow];
-    int run_i0 = -1, run_j0 = -1;
+    int run_span = -1;  // the run's first unknown, idx[0]: its knot span
     auto flush = [&] {
-      if (run_i0 < 0) return;
+      if (run_span < 0) return;
       for (int x = 0; x < m; ++x) {
         for (int y = 0; y <= x; ++y) {
           const int I = std::max(run_idx[x], run_idx[y]), J = std::min(run_idx[x], run_idx[y]);
@@ -298,18 +324,27 @@ DataTerms assemble_data(const Surface& s, std::span<const Point3> net, const Ord
     for (std::size_t k = n_points * c / chunks; k < n_points * (c + 1) / chunks; ++k) {
       const double w = weights.empty() ? 1.0 : weights[k];
       if (w == 0.0) continue;
-      const Vector3 y = points[k] - basis_row(s, net, order, params[k], rb, idx);
-      if (rb.i0 != run_i0 || rb.j0 != run_j0) {
+      const int* idx = own_idx;
+      const double* R = rb.R;
+      Vector3 y;
+      if (rows != nullptr) {
+        const std::size_t r = rows->row_of_point[k];
+        idx = &rows->idx[r * static_cast<std::size_t>(m)];
+        R = &rows->R[r * static_cast<std::size_t>(m)];
+        y = rows->y[r];
+      } else {
+        y = points[k] - basis_row(s, net, order, params[k], rb, own_idx);
+      }
+      if (idx[0] != run_span) {
         flush();
-        run_i0 = rb.i0;
-        run_j0 = rb.j0;
+        run_span = idx[0];
         std::copy(idx, idx + m, run_idx);
         std::fill(block, block + m * m, 0.0);
         std::fill(block_y, block_y + m * 3, 0.0);
       }
       for (int x = 0; x < m; ++x) {
-        const double wx = w * rb.R[x];
-        for (int yy = 0; yy <= x; ++yy) block[x * m + yy] += wx * rb.R[yy];
+        const double wx = w * R[x];
+        for (int yy = 0; yy <= x; ++yy) block[x * m + yy] += wx * R[yy];
         for (int c3 = 0; c3 < 3; ++c3) block_y[x * 3 + c3] += wx * y[c3];
       }
       t.yWy += w * y.squaredNorm();
@@ -424,28 +459,11 @@ struct Trial {
 // 2 n (b + 1) doubles; a 10 000-point face's 9 trials, 1.2 MB; a million points' finest fits, hundreds).
 constexpr std::size_t kParallelScanBytes = std::size_t{16} << 20;
 
-// Points the cross-validation score is summed over at most.
-constexpr std::size_t kCvPoints = 16384;
-
-// The points the leave-one-out score is summed over, each with its basis row (the nonzero R_I and their unknowns)
-// and its offset from the start surface, y_k = x_k − S⁰(u_k, v_k): made once per fit, used by every trial λ.
-// Above kCvPoints points, every stride-th point (in input order, so the same points for every λ): each term is
-// exact for its point, so the sum over the sample estimates the whole sum without bias, at a bounded cost.
-// The rows are ordered by knot span (stably: the same order for any thread count), so that each trial reads the
-// band inverse once per span, not once per point.
-struct CvRows {
-  int m = 0;                 // basis functions per row, (p + 1)(q + 1)
-  std::vector<int> idx;      // m per row; idx[0] names the row's span (its first unknown)
-  std::vector<double> R;     // m per row
-  std::vector<Vector3> y;    // one per row
-  std::vector<double> w;     // one per row
-};
-
 CvRows cv_rows(const Surface& s, std::span<const Point3> net, const Ordering& order, std::span<const Point3> points,
                std::span<const SurfaceParameter> params, std::span<const double> weights) {
   const int p = s.p(), q = s.q();
   const std::size_t n_points = points.size();
-  const std::size_t stride = std::max<std::size_t>(1, n_points / kCvPoints);
+  const std::size_t stride = cv_stride(n_points);
   std::vector<std::size_t> chosen;
   for (std::size_t k = 0; k < n_points; k += stride) {
     if (weights.empty() || weights[k] != 0.0) chosen.push_back(k);
@@ -480,6 +498,10 @@ CvRows cv_rows(const Surface& s, std::span<const Point3> net, const Ordering& or
       rows.w[at] = weights.empty() ? 1.0 : weights[k];
     }
   });
+  if (stride == 1) {
+    rows.row_of_point.assign(n_points, CvRows::kNoRow);
+    for (std::size_t r = 0; r < chosen.size(); ++r) rows.row_of_point[chosen[r]] = static_cast<std::uint32_t>(to[r]);
+  }
   return rows;
 }
 
@@ -597,15 +619,23 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   const int b = std::min(order.bandwidth(start.p(), start.q()), n - 1);
 
   const std::vector<Point3> net = cartesian_net(start);
-  // The data's normal equations, the penalty's matrix and the cross-validation's rows do not depend on one another:
-  // made side by side, each still in its own fixed order (the same numbers), so that one's serial parts (the rows'
-  // counting sort, the sums of the chunks) leave no core idle.
+  // The penalty's matrix is made side by side with the cross-validation's rows and the data's normal equations, each
+  // still in its own fixed order (the same numbers), so that one's serial parts (the rows' counting sort, the sums of
+  // the chunks) leave no core idle. Where the rows are every point's (the 10 000-point case), the normal equations
+  // are summed from them after they are made, one basis evaluation a point instead of two (its fit 17.3 → 15.9 ms,
+  // 15 runs interleaved); else each point's basis row is made for them, side by side with the rows.
   DataTerms data;
   Band G;
   CvRows rows;
-  tbb::parallel_invoke([&] { data = assemble_data(start, net, order, b, points, params, weights); },
-                       [&] { G = thin_plate_energy(start, order, b, span_weights); },
-                       [&] { rows = cv_rows(start, net, order, points, params, weights); });
+  if (cv_stride(n_points) == 1) {
+    tbb::parallel_invoke([&] { rows = cv_rows(start, net, order, points, params, weights); },
+                         [&] { G = thin_plate_energy(start, order, b, span_weights); });
+    data = assemble_data(start, net, order, b, points, params, weights, &rows);
+  } else {
+    tbb::parallel_invoke([&] { data = assemble_data(start, net, order, b, points, params, weights, nullptr); },
+                         [&] { G = thin_plate_energy(start, order, b, span_weights); },
+                         [&] { rows = cv_rows(start, net, order, points, params, weights); });
+  }
   if (data.used == 0 || !(data.weight_sum > 0.0)) return result;
   const double data_trace = data.AtWA.trace();
   const double scale_ratio = data_trace / std::max(G.trace(), 1e-300);
@@ -728,23 +758,31 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_points, 1024), [&](const auto& range) {
       constexpr int kMaxRow = (nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1);
       RationalBasis rb;
-      int idx[kMaxRow];
+      int own_idx[kMaxRow];
       double block[kMaxRow * kMaxRow];
-      int run_i0 = -1, run_j0 = -1;  // the basis row whose block is gathered
+      int run_span = -1;  // the first unknown (the knot span) of the basis row whose block is gathered
       const int m = (start.p() + 1) * (start.q() + 1);
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
-        detail::rational_basis(start, params[k].u, params[k].v, rb);
-        if (rb.i0 != run_i0 || rb.j0 != run_j0) {
-          run_i0 = rb.i0;
-          run_j0 = rb.j0;
-          row_unknowns(start, order, rb, idx);
+        // The cross-validation's row where it made one (every point of weight > 0 below 2·kCvPoints points).
+        const int* idx = own_idx;
+        const double* R = rb.R;
+        if (rows.cover_every_point() && rows.row_of_point[k] != CvRows::kNoRow) {
+          const std::size_t r = rows.row_of_point[k];
+          idx = &rows.idx[r * static_cast<std::size_t>(m)];
+          R = &rows.R[r * static_cast<std::size_t>(m)];
+        } else {
+          detail::rational_basis(start, params[k].u, params[k].v, rb);
+          row_unknowns(start, order, rb, own_idx);
+        }
+        if (idx[0] != run_span) {
+          run_span = idx[0];
           gather_block(Z, b, idx, m, block);
         }
-        result.variance_factor[k] = block_quadratic_form(block, rb.R, m);
+        result.variance_factor[k] = block_quadratic_form(block, R, m);
         Vector3 e = Vector3::Zero();
         for (int a = 0; a < m; ++a) {
           const std::size_t I = static_cast<std::size_t>(idx[a]);
-          e += rb.R[a] * Vector3(beta[3 * I], beta[3 * I + 1], beta[3 * I + 2]);
+          e += R[a] * Vector3(beta[3 * I], beta[3 * I + 1], beta[3 * I + 2]);
         }
         result.smoothing_bias[k] = e;
       }
