@@ -7,7 +7,18 @@
 #include "probecomp/nurbs/basis.hpp"
 #include "probecomp/nurbs/knot_insertion.hpp"
 
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#define PROBECOMP_HAVE_AVX_PATH 1
+#else
+#define PROBECOMP_HAVE_AVX_PATH 0
+#endif
+
 namespace probecomp::nurbs {
+
+namespace detail {
+std::atomic<bool> avx_evaluation{true};
+}  // namespace detail
 
 Surface::Surface(KnotVector U, KnotVector V, const std::vector<Point3>& P, const std::vector<double>& w)
     : U_(std::move(U)), V_(std::move(V)) {
@@ -46,6 +57,40 @@ Point3 Surface::control_point(int i, int j) const {
 
 namespace {
 
+#if PROBECOMP_HAVE_AVX_PATH
+// The bicubic tensor sum below in 256-bit registers: a homogeneous point is one register instead of two, half the
+// multiplications and additions of the SSE2 form (the closest-point Newton's evaluation, about 2.7 a query). Each
+// lane takes the same multiplication and addition in the same order (no fused multiply-add: -ffp-contract=off and
+// no FMA intrinsic), so the results are the portable form's bit for bit; tests compare the two.
+template <int D>
+__attribute__((target("avx"))) void bicubic_tensor_sum_avx(const HomogeneousPoint* net, int stride, const double* Nu,
+                                                           const double* Nv, HomogeneousPoint (&A)[D + 1][D + 1]) {
+  __m256d a[D + 1][D + 1];
+  for (int k = 0; k <= D; ++k)
+    for (int l = 0; l + k <= D; ++l) a[k][l] = _mm256_setzero_pd();
+  for (int i = 0; i <= 3; ++i) {
+    const HomogeneousPoint* row = net + i * stride;
+    __m256d T[D + 1];
+    for (int l = 0; l <= D; ++l) T[l] = _mm256_setzero_pd();
+    for (int j = 0; j <= 3; ++j) {
+      const __m256d P = _mm256_loadu_pd(row[j].data());
+      for (int l = 0; l <= D; ++l) T[l] = _mm256_add_pd(T[l], _mm256_mul_pd(_mm256_set1_pd(Nv[l * 4 + j]), P));
+    }
+    for (int k = 0; k <= D; ++k) {
+      const __m256d nk = _mm256_set1_pd(Nu[k * 4 + i]);
+      for (int l = 0; l + k <= D; ++l) a[k][l] = _mm256_add_pd(a[k][l], _mm256_mul_pd(nk, T[l]));
+    }
+  }
+  for (int k = 0; k <= D; ++k)
+    for (int l = 0; l + k <= D; ++l) _mm256_storeu_pd(A[k][l].data(), a[k][l]);
+}
+
+bool avx_usable() {
+  static const bool usable = __builtin_cpu_supports("avx");
+  return usable;
+}
+#endif
+
 // Derivatives A[k][l] = ∂^{k+l} Sw / ∂u^k ∂v^l of the homogeneous surface for k + l <= D (A3.6).
 // Summing each row of the net over v first and then the rows over u costs (p+1)(q+1)(D+1) + (p+1)·#(k,l)
 // four-vector operations instead of (p+1)(q+1)·#(k,l). P, Q > 0 are the degrees fixed at compile time, so that the
@@ -73,11 +118,18 @@ void homogeneous_derivatives(const Surface& s, double u, double v, HomogeneousPo
     basis_function_derivatives(s.U(), su, u, D, Nu);
     basis_function_derivatives(s.V(), sv, v, D, Nv);
   }
+  const int stride = s.num_v();
+  const HomogeneousPoint* net = s.homogeneous().data();
+#if PROBECOMP_HAVE_AVX_PATH
+  if constexpr (P == 3 && Q == 3) {
+    if (avx_usable() && detail::avx_evaluation.load(std::memory_order_relaxed)) {
+      return bicubic_tensor_sum_avx<D>(net + (su - p) * stride + (sv - q), stride, Nu, Nv, A);
+    }
+  }
+#endif
   for (int k = 0; k <= D; ++k)
     for (int l = 0; l + k <= D; ++l) A[k][l].setZero();
 
-  const int stride = s.num_v();
-  const HomogeneousPoint* net = s.homogeneous().data();
   for (int i = 0; i <= p; ++i) {
     const HomogeneousPoint* row = net + (su - p + i) * stride + (sv - q);
     HomogeneousPoint T[D + 1];

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <iostream>
 #include <random>
 
 #include "support/test_surfaces.hpp"
@@ -65,6 +66,52 @@ TEST(Surface, KnownKnotSpansGiveTheSameDerivatives) {
     EXPECT_EQ(a.Suv, b.Suv);
     EXPECT_EQ(a.Svv, b.Svv);
     EXPECT_EQ(evaluate(s, u, v), evaluate(s, u, v, spans));
+  }
+}
+
+// Bicubic derivatives take 256-bit registers where the processor has AVX (half the operations). Each lane does the
+// portable SSE2 form's multiplication and addition in the same order, so the two must agree to the last bit:
+// results may not depend on the machine. Rational and non-rational, on knot span ends and inside.
+TEST(Surface, BicubicDerivativesAreTheSameBitForBitWithAndWithoutAvx) {
+  struct Restore {
+    ~Restore() { detail::avx_evaluation = true; }
+  } restore;
+  if (!__builtin_cpu_supports("avx")) std::cout << "[ note ] no AVX here: both runs take the portable form\n";
+  std::mt19937_64 rng(77);
+  std::uniform_real_distribution<double> t(0.0, 1.0);
+  const Surface surfaces[] = {random_rational_surface(41, {.nu = 9, .nv = 8, .weight_min = 0.3, .weight_max = 3.0}),
+                              random_rational_surface(42, {.nu = 6, .nv = 11, .weight_min = 1.0, .weight_max = 1.0}),
+                              testing::freeform_panel(43, 12)};
+  for (const Surface& s : surfaces) {
+    ASSERT_EQ(s.p(), 3);
+    ASSERT_EQ(s.q(), 3);
+    std::vector<std::pair<double, double>> at;
+    for (int k = 0; k < 300; ++k) at.emplace_back(t(rng), t(rng));
+    for (double u : s.U().breakpoints())
+      for (double v : s.V().breakpoints()) at.emplace_back(u, v);
+    for (const auto& [u, v] : at) {
+      const KnotSpans spans{s.U().find_span(u), s.V().find_span(v)};
+      detail::avx_evaluation = true;
+      const SurfaceD2 a = derivatives_d2(s, u, v), a_spans = derivatives_d2(s, u, v, spans);
+      const SurfaceD1 a1 = derivatives_d1(s, u, v);
+      const Point3 a0 = evaluate(s, u, v);
+      detail::avx_evaluation = false;
+      const SurfaceD2 b = derivatives_d2(s, u, v), b_spans = derivatives_d2(s, u, v, spans);
+      const SurfaceD1 b1 = derivatives_d1(s, u, v);
+      const Point3 b0 = evaluate(s, u, v);
+      for (const auto& [x, y] : {std::pair{&a, &b}, std::pair{&a_spans, &b_spans}}) {
+        EXPECT_EQ(x->S, y->S) << u << ' ' << v;
+        EXPECT_EQ(x->Su, y->Su);
+        EXPECT_EQ(x->Sv, y->Sv);
+        EXPECT_EQ(x->Suu, y->Suu);
+        EXPECT_EQ(x->Suv, y->Suv);
+        EXPECT_EQ(x->Svv, y->Svv);
+      }
+      EXPECT_EQ(a1.S, b1.S);
+      EXPECT_EQ(a1.Su, b1.Su);
+      EXPECT_EQ(a1.Sv, b1.Sv);
+      EXPECT_EQ(a0, b0);
+    }
   }
 }
 

@@ -3,6 +3,7 @@
 //   S(u,v) = Σ_i Σ_j N_{i,p}(u) N_{j,q}(v) w_ij P_ij / Σ_i Σ_j N_{i,p}(u) N_{j,q}(v) w_ij.
 // Control points are stored homogeneous, Pw_ij = (w_ij P_ij, w_ij), row i (u) major. Weights are positive.
 
+#include <atomic>
 #include <span>
 #include <vector>
 
@@ -61,6 +62,12 @@ struct SurfaceD2 {
 struct KnotSpans {
   int u = -1, v = -1;
 };
+
+namespace detail {
+// Whether bicubic derivatives may take the 256-bit (AVX) form where the processor has it: true unless a test turns
+// it off to compare the two forms (they agree bit for bit).
+extern std::atomic<bool> avx_evaluation;
+}  // namespace detail
 
 // Parameters outside the domain are clamped to it.
 [[nodiscard]] Point3 evaluate(const Surface& s, double u, double v, KnotSpans spans = {});
