@@ -76,7 +76,9 @@ TEST(Surface, BicubicDerivativesAreTheSameBitForBitWithAndWithoutAvx) {
   struct Restore {
     ~Restore() { detail::avx_evaluation = true; }
   } restore;
+#if defined(__x86_64__)
   if (!__builtin_cpu_supports("avx")) std::cout << "[ note ] no AVX here: both runs take the portable form\n";
+#endif
   std::mt19937_64 rng(77);
   std::uniform_real_distribution<double> t(0.0, 1.0);
   const Surface surfaces[] = {random_rational_surface(41, {.nu = 9, .nv = 8, .weight_min = 0.3, .weight_max = 3.0}),
