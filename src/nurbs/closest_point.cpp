@@ -128,13 +128,17 @@ double flatness(const Hessian& h) {
   return {solve1(Huu, Juu, gu), solve1(Hvv, Jvv, gv)};
 }
 
-// Four Newton steps on the surface's second-order Taylor polynomial about `c` (at (u0, v0)), kept inside `dom`: no
+// Newton steps on the surface's second-order Taylor polynomial about `c` (at (u0, v0)), kept inside `dom`: no
 // evaluation. Its foot is within the polynomial's third-order error of the surface's (a cell is small against the
 // curvature radii), where a single Newton step from (u0, v0) is off by the square of the start's distance.
+// Two steps: the polynomial's own foot is then nearer than that error, and Newton on the surface takes as many
+// steps after them as after four (BM_ClosestPoint: 2.513 against 2.509 a query; one step leaves 3.13). Each step
+// is a chain of dependent operations with a division in it: two fewer made the benchmark 7–9 % faster.
+constexpr int kTaylorSteps = 2;
 Iterate taylor_foot(const SurfaceD2& c, const Point3& P, double u0, double v0, const Domain& dom) {
   Iterate m{u0, v0, c, c.S - P, (c.S - P).squaredNorm(), true};
   double a = 0.0, b = 0.0;
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < kTaylorSteps; ++k) {
     const double gu = m.r.dot(m.d.Su), gv = m.r.dot(m.d.Sv);
     const auto [du, dv] = newton_step(hessian(m), gu, gv, active_set(dom, m, gu, gv));
     a = std::clamp(u0 + a + du, dom.u0, dom.u1) - u0;
