@@ -86,10 +86,10 @@ void add_deformation(const std::string& spec, simulation::Deformation& d) {
     return;
   }
   if (kind == "sine" || kind == "sinusoid") {
-    const std::string what = "--deform sine:A,L,DX,DY,DZ[,OX,OY,OZ[,W[,PHASE]]]";
+    const std::string what = "--deform sine:A,L,DX,DY,DZ[,OX,OY,OZ[,W[,PHASE[,BX,BY,BZ]]]]";
     const std::vector<double> v = numbers(args, what);
-    if (v.size() != 5 && v.size() != 8 && v.size() != 9 && v.size() != 10) {
-      throw std::invalid_argument(what + ": needs 5, 8, 9 or 10 numbers, got " + std::to_string(v.size()));
+    if (v.size() != 5 && v.size() != 8 && v.size() != 9 && v.size() != 10 && v.size() != 13) {
+      throw std::invalid_argument(what + ": needs 5, 8, 9, 10 or 13 numbers, got " + std::to_string(v.size()));
     }
     const Vector3 direction(v[2], v[3], v[4]);
     if (!(v[1] > 0.0)) throw std::invalid_argument(what + ": the wavelength L must be positive");
@@ -100,11 +100,42 @@ void add_deformation(const std::string& spec, simulation::Deformation& d) {
       if (v[8] < 0.0) throw std::invalid_argument(what + ": the window W must not be negative");
       s.window = v[8];
     }
-    if (v.size() == 10) s.phase = v[9];
+    if (v.size() >= 10) s.phase = v[9];
+    if (v.size() == 13) {
+      const Vector3 band(v[10], v[11], v[12]);
+      if (!(band.norm() > 0.0)) throw std::invalid_argument(what + ": the band direction must not be zero");
+      if (!(s.window > 0.0)) throw std::invalid_argument(what + ": a band needs a window W > 0");
+      s.band = band.normalized();
+    }
     d.sinusoids.push_back(s);
     return;
   }
-  throw std::invalid_argument("--deform: '" + spec + "' is neither bump:X,Y,Z,A,W nor sine:A,L,DX,DY,DZ[,...]");
+  if (kind == "crease") {
+    const std::string what = "--deform crease:OX,OY,OZ,DX,DY,DZ,H,W";
+    const std::vector<double> v = numbers(args, what);
+    if (v.size() != 8) throw std::invalid_argument(what + ": needs 8 numbers, got " + std::to_string(v.size()));
+    const Vector3 direction(v[3], v[4], v[5]);
+    if (!(direction.norm() > 0.0)) throw std::invalid_argument(what + ": the direction must not be zero");
+    if (!(v[7] > 0.0)) throw std::invalid_argument(what + ": the width W must be positive");
+    d.creases.push_back({.origin = Point3(v[0], v[1], v[2]), .direction = direction.normalized(), .height = v[6],
+                         .width = v[7]});
+    return;
+  }
+  if (kind == "twist") {
+    const std::string what = "--deform twist:OX,OY,OZ,D1X,D1Y,D1Z,D2X,D2Y,D2Z,A,L";
+    const std::vector<double> v = numbers(args, what);
+    if (v.size() != 11) throw std::invalid_argument(what + ": needs 11 numbers, got " + std::to_string(v.size()));
+    const Vector3 first(v[3], v[4], v[5]), second(v[6], v[7], v[8]);
+    if (!(first.norm() > 0.0) || !(second.norm() > 0.0)) {
+      throw std::invalid_argument(what + ": the directions must not be zero");
+    }
+    if (!(v[10] > 0.0)) throw std::invalid_argument(what + ": the length L must be positive");
+    d.twists.push_back({.origin = Point3(v[0], v[1], v[2]), .first = first.normalized(), .second = second.normalized(),
+                        .amplitude = v[9], .length = v[10]});
+    return;
+  }
+  throw std::invalid_argument("--deform: '" + spec +
+                              "' is none of bump:X,Y,Z,A,W, sine:A,L,DX,DY,DZ[,...], crease:... or twist:...");
 }
 
 }  // namespace probecomp::cli

@@ -23,8 +23,13 @@ namespace probecomp::cli {
 const char* const kDeformHelp =
     "Shape deviation of the actual part along the nominal outward normal (repeatable; they add up):\n"
     "  bump:X,Y,Z,A,W  Gaussian A*exp(-|x-c|^2/(2W^2)) about c = (X,Y,Z): amplitude A mm (negative: a dent), width W mm\n"
-    "  sine:A,L,DX,DY,DZ[,OX,OY,OZ[,W[,PHASE]]]  A*sin(2*pi*d.(x-o)/L + PHASE deg) along the direction d = (DX,DY,DZ),\n"
-    "      origin o (default 0,0,0), under a Gaussian window of width W mm about o when W > 0 (a local wave)\n"
+    "  sine:A,L,DX,DY,DZ[,OX,OY,OZ[,W[,PHASE[,BX,BY,BZ]]]]  A*sin(2*pi*d.(x-o)/L + PHASE deg) along the direction d = (DX,DY,DZ),\n"
+    "      origin o (default 0,0,0), under a Gaussian window of width W mm about o when W > 0 (a local wave); with\n"
+    "      B = (BX,BY,BZ) the window is over the distance along B only (a band of waves across B)\n"
+    "  crease:OX,OY,OZ,DX,DY,DZ,H,W  a smoothed step H*(1+tanh(2*d.(x-o)/W))/2 of height H mm rising over W mm\n"
+    "      across the plane through o normal to d\n"
+    "  twist:OX,OY,OZ,D1X,D1Y,D1Z,D2X,D2Y,D2Z,A,L  A*(d1.(x-o))*(d2.(x-o))/L^2: a twist (d1 normal to d2), a saddle\n"
+    "      when turned 45 degrees\n"
     "Positions in the CAD frame, mm.";
 
 namespace {

@@ -30,6 +30,25 @@ double reach(double amplitude, double width) {
 
 double gaussian(const Point3& x, const Point3& c, double w) { return std::exp(-(x - c).squaredNorm() / (2.0 * w * w)); }
 
+// A sinusoid's window at x: radial about its origin, or over the distance along its band direction.
+double window(const Sinusoid& s, const Point3& x) {
+  if (!(s.window > 0.0)) return 1.0;
+  if (s.band.squaredNorm() == 0.0) return gaussian(x, s.origin, s.window);
+  const double a = s.band.normalized().dot(x - s.origin);
+  return std::exp(-a * a / (2.0 * s.window * s.window));
+}
+
+double window_distance(const Sinusoid& s, const Point3& x) {
+  return s.band.squaredNorm() == 0.0 ? (x - s.origin).norm() : std::abs(s.band.normalized().dot(x - s.origin));
+}
+
+// Distance from a crease's plane beyond which its curvature is negligible: tanh's derivatives fall as
+// e^(−4|a|/w), so h·e^(−4|a|/w) < kNegligible.
+double crease_reach(const Crease& c) {
+  const double ratio = std::abs(c.height) / kNegligible;
+  return ratio <= 1.0 ? 0.0 : 0.25 * c.width * std::log(ratio);
+}
+
 // Knots to insert in one direction so that every span is short enough for the deformation. `samples` are the
 // surface's points on a grid of `per_span` parameters per span (plus the end) along this direction (index a)
 // by `rows` along the other (index b): point (a, b) at samples[a * rows + b].
@@ -63,7 +82,14 @@ double Deformation::displacement(const Point3& x) const {
   for (const Sinusoid& s : sinusoids) {
     const double phase = 2.0 * std::numbers::pi * s.direction.normalized().dot(x - s.origin) / s.wavelength +
                          s.phase * std::numbers::pi / 180.0;
-    d += s.amplitude * std::sin(phase) * (s.window > 0.0 ? gaussian(x, s.origin, s.window) : 1.0);
+    d += s.amplitude * std::sin(phase) * window(s, x);
+  }
+  for (const Crease& c : creases) {
+    d += c.height * 0.5 * (1.0 + std::tanh(2.0 * c.direction.normalized().dot(x - c.origin) / c.width));
+  }
+  for (const Twist& t : twists) {
+    d += t.amplitude * t.first.normalized().dot(x - t.origin) * t.second.normalized().dot(x - t.origin) /
+         (t.length * t.length);
   }
   return d;
 }
@@ -74,9 +100,14 @@ double Deformation::feature_length(const Point3& x) const {
     if ((x - b.centre).norm() <= reach(b.amplitude, b.width)) length = std::min(length, b.width);
   }
   for (const Sinusoid& s : sinusoids) {
-    if (s.window > 0.0 && (x - s.origin).norm() > reach(s.amplitude, s.window)) continue;
+    if (s.window > 0.0 && window_distance(s, x) > reach(s.amplitude, s.window)) continue;
     length = std::min(length, s.wavelength / 4.0);
     if (s.window > 0.0) length = std::min(length, s.window);
+  }
+  // A step rising over w changes its curvature over about w/2; a twist is a quadratic the nominal's knots take as
+  // they are (the displaced surface's own refinement meets its tolerance).
+  for (const Crease& c : creases) {
+    if (std::abs(c.direction.normalized().dot(x - c.origin)) <= crease_reach(c)) length = std::min(length, 0.5 * c.width);
   }
   return length;
 }

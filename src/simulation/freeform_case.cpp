@@ -5,12 +5,10 @@
 
 namespace probecomp::simulation {
 
-namespace {
-
 // 9 × 6 control points over x ∈ [−50, 50], y ∈ [−25, 25] at the Greville abscissae of non-uniform knots, heights
 // from two crossing waves (a few mm), weights between 0.8 and 1.25: smooth like a designed panel, curvature radii
 // above 20 mm.
-nurbs::Surface nominal_panel() {
+nurbs::Surface paper_panel() {
   nurbs::KnotVector U({0, 0, 0, 0, 0.16, 0.3, 0.48, 0.66, 0.82, 1, 1, 1, 1}, 3);
   nurbs::KnotVector V({0, 0, 0, 0, 0.37, 0.64, 1, 1, 1, 1}, 3);
   std::vector<Point3> P;
@@ -27,11 +25,9 @@ nurbs::Surface nominal_panel() {
   return nurbs::Surface(std::move(U), std::move(V), P, w);
 }
 
-}  // namespace
-
 FreeformCase paper_freeform_case(bool reversed) {
   FreeformCase c;
-  const nurbs::Surface s = nominal_panel();
+  const nurbs::Surface s = paper_panel();
   // A lone surface: its material side comes from the approach normals or the data, not the file.
   cad::Face face{.index = 0, .name = "freeform panel", .source_type = "bspline",
                  .surface = reversed ? nurbs::transposed(s) : s, .trim = nullptr, .outward = reversed ? -1 : 1,

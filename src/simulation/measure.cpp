@@ -90,6 +90,26 @@ std::vector<ProgrammedPoint> random_plan(const cad::Face& face, int n, std::uint
   return plan_at(face, ab);
 }
 
+std::vector<ProgrammedPoint> scan_line_plan(const cad::Face& face, int lines, int per_line, bool along_u,
+                                            PlanMargin margin) {
+  const double ma = along_u ? margin.u : margin.v, mb = along_u ? margin.v : margin.u;
+  std::vector<std::pair<double, double>> ab;
+  ab.reserve(static_cast<std::size_t>(std::max(lines, 0)) * static_cast<std::size_t>(std::max(per_line, 0)));
+  for (int l = 0; l < lines; ++l) {
+    const double b = mb + (1.0 - 2.0 * mb) * (lines > 1 ? static_cast<double>(l) / (lines - 1) : 0.5);
+    for (int k = 0; k < per_line; ++k) {
+      const int along = l % 2 == 0 ? k : per_line - 1 - k;
+      const double a = ma + (1.0 - 2.0 * ma) * (per_line > 1 ? static_cast<double>(along) / (per_line - 1) : 0.5);
+      if (along_u) {
+        ab.emplace_back(a, b);
+      } else {
+        ab.emplace_back(b, a);
+      }
+    }
+  }
+  return plan_at(face, ab);
+}
+
 const char* to_string(Touch::Status s) {
   switch (s) {
     case Touch::Status::OK: return "ok";

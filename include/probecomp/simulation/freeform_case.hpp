@@ -23,6 +23,10 @@ struct FreeformCase {
   int grid_u = 120, grid_v = 60;
 };
 
+// The case's nominal panel: rational bicubic, 9 × 6 control points over x ∈ [−50, 50], y ∈ [−25, 25], heights of
+// a few mm from two crossing waves, weights 0.8–1.25; S_u × S_v points up (+z, out of the material).
+[[nodiscard]] nurbs::Surface paper_panel();
+
 // The paper's case. `reversed`: the same part with u and v exchanged, so that S_u × S_v points into the material
 // (the face's outward is then −1, and nothing in the file says so).
 [[nodiscard]] FreeformCase paper_freeform_case(bool reversed = false);

@@ -47,6 +47,11 @@ struct PlanMargin {
 [[nodiscard]] std::vector<ProgrammedPoint> grid_plan(const cad::Face& face, int nu, int nv, PlanMargin margin = {});
 [[nodiscard]] std::vector<ProgrammedPoint> random_plan(const cad::Face& face, int n, std::uint64_t seed,
                                                        PlanMargin margin = {});
+// A scanning probe's lines: `lines` iso-parameter lines evenly spaced in v, each running along u with `per_line`
+// points evenly spaced (along_u false: the roles of u and v exchanged), in the order a scan takes them, back and
+// forth line after line.
+[[nodiscard]] std::vector<ProgrammedPoint> scan_line_plan(const cad::Face& face, int lines, int per_line, bool along_u,
+                                                          PlanMargin margin = {});
 
 struct MeasurementOptions {
   double probe_radius = 1.0;  // mm
