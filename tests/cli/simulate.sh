@@ -34,14 +34,23 @@ paste -d, "$W/plan.csv" "$W/b/raw.csv" | awk -F, 'NR > 1 {
     off = sqrt(cx * cx + cy * cy + cz * cz); if (off > 2e-9) { print "FAIL: row " NR " is " off " mm off its line"; bad = 1 } }
   END { exit bad }' || fail=1
 
+# Creases, twists and banded waves are accepted and simulated.
+"$P" simulate --cad "$CAD" --faces 2 --spacing 0.1 --probe-radius 0.1 --deform crease:0.5,0.5,0,1,1,0,0.005,0.1 \
+  --deform twist:0.5,0.5,0,1,0,0,0,1,0,0.003,0.5 --deform sine:0.002,0.3,1,0,0,0.5,0.5,0,0.1,0,0,1,0 \
+  --output-dir "$W/c" >"$W/c.txt" || { echo "FAIL: simulate with a crease, a twist and a banded wave"; cat "$W/c.txt"; fail=1; }
+grep -q ' 0 missed' "$W/c.txt" || { echo "FAIL: creased, twisted face missed"; cat "$W/c.txt"; fail=1; }
+
 B="$W/bad"
 expect_error 'bump:X,Y,Z,A,W' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --deform bump:1,2,3 --output-dir "$B"
-expect_error "neither bump" "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --deform blob:1 --output-dir "$B"
+expect_error "is none of bump" "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --deform blob:1 --output-dir "$B"
+expect_error 'crease:OX,OY,OZ,DX,DY,DZ,H,W: the width W must be positive' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --deform crease:0,0,0,1,0,0,0.1,0 --output-dir "$B"
+expect_error 'twist:OX,OY,OZ,D1X,D1Y,D1Z,D2X,D2Y,D2Z,A,L: needs 11 numbers' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --deform twist:0,0,0,1,0,0 --output-dir "$B"
+expect_error 'a band needs a window W > 0' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --deform sine:0.01,8,1,0,0,0,0,0,0,0,0,1,0 --output-dir "$B"
 expect_error 'needs 6 numbers' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --misalign 1,2 --output-dir "$B"
 expect_error 'probe-radius' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0 --output-dir "$B"
 expect_error '--plan PLAN.csv or --spacing' "$B/raw.csv" "$P" simulate --cad "$CAD" --probe-radius 0.1 --output-dir "$B"
 printf 'x,y,z\n0,0,0\n' >"$W/noijk.csv"
 expect_error 'needs i,j,k' "$B/raw.csv" "$P" simulate --cad "$CAD" --plan "$W/noijk.csv" --probe-radius 0.1 --output-dir "$B"
 expect_error 'no programmed point touches' "$B/raw.csv" "$P" simulate --cad "$CAD" --plan "$W/plan.csv" --probe-radius 0.1 --misalign 50,0,0,0,0,0 --output-dir "$B"
-[ $fail -eq 0 ] && echo "simulate: files, rows, line check, compensate round trip and 7 bad inputs as promised"
+[ $fail -eq 0 ] && echo "simulate: files, rows, line check, compensate round trip and 10 bad inputs as promised; creases, twists and banded waves"
 exit $fail
