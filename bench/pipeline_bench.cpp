@@ -109,7 +109,7 @@ void BM_NormalCheck1M(benchmark::State& state) {
   }
   std::size_t checked = 0;
   for (auto _ : state) {
-    const std::vector<double> angle = compensation::normal_disagreement(s, centres, params, weights);
+    const std::vector<double> angle = compensation::normal_disagreement(s, centres, params, weights).angle;
     checked = 0;
     for (const double a : angle) checked += a != 0.0;
     benchmark::DoNotOptimize(angle.data());

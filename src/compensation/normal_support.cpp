@@ -77,20 +77,44 @@ std::array<Vector3, 2> local_normals(const Point3& x, std::span<const Point3> ne
   return out;
 }
 
+// Whether the in-fit point i's nearest neighbours lie along a line (NormalCheck::line_variance_ratio).
+bool on_a_line(const geometry::OwnedPointTree& tree, std::size_t i, const NormalCheck& check,
+               std::vector<std::uint32_t>& idx, std::vector<double>& dist_sq) {
+  const std::vector<Point3>& pts = tree.cloud.points;
+  const std::size_t wanted = std::min<std::size_t>(static_cast<std::size_t>(check.line_neighbours), pts.size());
+  idx.resize(wanted);
+  dist_sq.resize(wanted);
+  nanoflann::KNNResultSet<double, std::uint32_t, std::uint32_t> knn(wanted);
+  knn.init(idx.data(), dist_sq.data());  // squared distances (nanoflann's L2 adaptor)
+  const double q[3] = {pts[i].x(), pts[i].y(), pts[i].z()};
+  tree.tree.findNeighbors(knn, q, nanoflann::SearchParams());
+  if (knn.size() < 3) return false;
+  Point3 mean = Point3::Zero();
+  for (std::size_t j = 0; j < knn.size(); ++j) mean += pts[idx[j]];
+  mean /= static_cast<double>(knn.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (std::size_t j = 0; j < knn.size(); ++j) cov += (pts[idx[j]] - mean) * (pts[idx[j]] - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> pca;
+  pca.computeDirect(cov);
+  const Eigen::Vector3d e = pca.eigenvalues();  // ascending
+  return e[2] > 0.0 && e[1] < check.line_variance_ratio * e[2];
+}
+
 }  // namespace
 
-std::vector<double> normal_disagreement(const nurbs::Surface& fit, std::span<const Point3> centres,
+NormalDisagreement normal_disagreement(const nurbs::Surface& fit, std::span<const Point3> centres,
                                         std::span<const fitting::SurfaceParameter> params,
                                         std::span<const double> weights, const NormalCheck& check) {
   const std::size_t n = centres.size();
   std::vector<std::uint32_t> kept, left_out;
   for (std::size_t k = 0; k < n; ++k) (weights.empty() || weights[k] > 0.0 ? kept : left_out).push_back(static_cast<std::uint32_t>(k));
-  if (left_out.empty()) return {};
-  std::vector<double> angle(n, 0.0);
+  NormalDisagreement out;
   const auto quiet_nan = std::numeric_limits<double>::quiet_NaN();
   if (kept.size() < 6) {
-    for (std::uint32_t k : kept) angle[k] = quiet_nan;
-    return angle;
+    if (left_out.empty()) return out;
+    out.angle.assign(n, 0.0);
+    for (std::uint32_t k : kept) out.angle[k] = quiet_nan;
+    return out;
   }
   // The in-fit centres' tree; its point i is fitted point kept[i].
   std::vector<Point3> kept_centres;
@@ -98,6 +122,34 @@ std::vector<double> normal_disagreement(const nurbs::Surface& fit, std::span<con
   for (std::uint32_t k : kept) kept_centres.push_back(centres[k]);
   const geometry::OwnedPointTree in_fit(std::move(kept_centres));
   const std::vector<Point3>& pts = in_fit.cloud.points;
+
+  // Sampled along lines? Decided on a fixed sample of points; then each point on a line is found.
+  std::vector<char> on_line;
+  {
+    const std::size_t stride = std::max<std::size_t>(1, kept.size() / kSpacingSamples);
+    const std::size_t sampled = (pts.size() + stride - 1) / stride;
+    std::vector<char> sample_on_line(sampled, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sampled, 256), [&](const auto& range) {
+      std::vector<std::uint32_t> idx;
+      std::vector<double> dist_sq;
+      for (std::size_t j = range.begin(); j != range.end(); ++j) {
+        sample_on_line[j] = on_a_line(in_fit, j * stride, check, idx, dist_sq);
+      }
+    });
+    const auto lined = std::count(sample_on_line.begin(), sample_on_line.end(), 1);
+    out.along_lines = static_cast<double>(lined) >= check.line_share * static_cast<double>(sampled);
+    if (out.along_lines) {
+      on_line.assign(pts.size(), 0);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size(), 1024), [&](const auto& range) {
+        std::vector<std::uint32_t> i2;
+        std::vector<double> d2;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) on_line[i] = on_a_line(in_fit, i, check, i2, d2);
+      });
+    }
+  }
+  if (left_out.empty() && !out.along_lines) return out;
+  std::vector<double>& angle = out.angle;
+  angle.assign(n, 0.0);
 
   // The spacing: the median distance from a kept point to its nearest other kept point, over a fixed sample.
   const std::size_t stride = std::max<std::size_t>(1, kept.size() / kSpacingSamples);
@@ -126,9 +178,23 @@ std::vector<double> normal_disagreement(const nurbs::Surface& fit, std::span<con
   // Those in the tree's leaf order (neighbouring queries share cached nodes: twice as fast as in input order on
   // scattered points), then the left-out points themselves (whose normal is the gap's), as fitted points. Each
   // result is the point's own, whatever the order.
-  std::vector<std::uint32_t> checked;
-  for (const std::uint32_t i : in_fit.tree.vAcc) {
-    if (near_gap[i]) checked.push_back(kept[i]);
+  // Points on lines beyond check.max_line_checks are checked every stride-th in that order, and the others take the angle of
+  // the last one checked before them (a neighbour in the tree's leaf: the angle changes over the lines' spacing, not
+  // from point to point along a line).
+  std::vector<std::uint32_t> checked, copied_from_previous;
+  {
+    std::size_t on_lines = 0;
+    for (const std::uint32_t i : in_fit.tree.vAcc) on_lines += !on_line.empty() && on_line[i] && !near_gap[i];
+    const std::size_t most = std::max<std::size_t>(check.max_line_checks, 1);
+    const std::size_t stride = (on_lines + most - 1) / most;
+    std::size_t seen = 0;
+    for (const std::uint32_t i : in_fit.tree.vAcc) {
+      if (near_gap[i]) {
+        checked.push_back(kept[i]);
+      } else if (!on_line.empty() && on_line[i]) {
+        (seen++ % std::max<std::size_t>(stride, 1) == 0 ? checked : copied_from_previous).push_back(kept[i]);
+      }
+    }
   }
   checked.insert(checked.end(), left_out.begin(), left_out.end());
 
@@ -146,8 +212,8 @@ std::vector<double> normal_disagreement(const nurbs::Surface& fit, std::span<con
       const Point3& x = d.S;
       const nurbs::UnitNormal nf = nurbs::unit_normal(fit, at.u, at.v, d.Su, d.Sv);
       double result = quiet_nan;
-      for (int count = check.neighbours; nf.status != nurbs::UnitNormal::Status::Degenerate &&
-                                         count <= check.max_neighbours;
+      const int most = out.along_lines ? check.max_line_neighbours : check.max_neighbours;
+      for (int count = check.neighbours; nf.status != nurbs::UnitNormal::Status::Degenerate && count <= most;
            count *= 2) {
         const std::size_t wanted = std::min<std::size_t>(static_cast<std::size_t>(count), pts.size());
         idx.resize(wanted);
@@ -169,7 +235,21 @@ std::vector<double> normal_disagreement(const nurbs::Surface& fit, std::span<con
       angle[k] = result;
     }
   });
-  return angle;
+  if (!copied_from_previous.empty()) {
+    // In leaf order again: each copied point after the checked one it follows.
+    std::vector<char> is_copied(n, 0);
+    for (const std::uint32_t k : copied_from_previous) is_copied[k] = 1;
+    double last = quiet_nan;
+    for (const std::uint32_t i : in_fit.tree.vAcc) {
+      const std::uint32_t k = kept[i];
+      if (is_copied[k]) {
+        angle[k] = last;
+      } else if (!on_line.empty() && on_line[i] && !near_gap[i]) {
+        last = angle[k];
+      }
+    }
+  }
+  return out;
 }
 
 }  // namespace probecomp::compensation

@@ -605,10 +605,11 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     }
     if (rep.fitted) {
       std::vector<double> last_weights(in_fit.begin(), in_fit.end());
-      const std::vector<double> angle = normal_disagreement(fit->surface, pts, fit->params, last_weights);
-      if (!angle.empty()) {
+      const NormalDisagreement check = normal_disagreement(fit->surface, pts, fit->params, last_weights);
+      ff.normal_checked_along_lines = check.along_lines;
+      if (!check.angle.empty()) {
         ff.normal_angle.resize(members.size());
-        for (std::size_t i = 0; i < members.size(); ++i) ff.normal_angle[i] = angle[position[i]];
+        for (std::size_t i = 0; i < members.size(); ++i) ff.normal_angle[i] = check.angle[position[i]];
       }
       per_member(*fit, position);
       rep.fit_status = fit->status;
@@ -899,8 +900,8 @@ void register_without_outliers(const PreparedModel& prepared, std::span<const Po
   r = std::move(second);
 }
 
-// Rows whose u is mostly the doubt about the fit's normal next to points left out (compensation/normal_support.hpp):
-// one warning per face, with the largest angle and what it makes.
+// Rows whose u is mostly the doubt about the fit's normal next to points left out or between scan lines
+// (compensation/normal_support.hpp): one warning per face, with the largest angle and what it makes.
 void normal_warnings(const FitResult& fits, const geometry::TipRadii& radii, std::span<const CompensatedPoint> points,
                      std::vector<std::string>& warnings) {
   for (const FaceFit& ff : fits.faces) {
@@ -920,19 +921,25 @@ void normal_warnings(const FitResult& fits, const geometry::TipRadii& radii, std
       }
     }
     const std::string face = "face " + std::to_string(ff.report.face) + ": ";
+    const bool lines = ff.normal_checked_along_lines;
     if (doubtful > 0) {
       char angle[32];
       std::snprintf(angle, sizeof angle, "%.1f", largest_angle * 180.0 / std::numbers::pi);
-      warnings.push_back(face + "next to the points left out of its fit, the fitted normal is up to " + angle +
-                         "° from what the centres around them show (the fit swings across the gap they leave): " +
-                         std::to_string(doubtful) + " row" + (doubtful == 1 ? "'s u holds" : "s' u hold") +
-                         " the r(1 - cos θ) that makes, up to " + mm(largest_doubt) +
-                         " mm; measure more points there (with the outliers' cause removed) to settle it");
+      const std::string rows = std::to_string(doubtful) + " row" + (doubtful == 1 ? "'s u holds" : "s' u hold") +
+                               " the r(1 - cos θ) that makes, up to " + mm(largest_doubt) + " mm; ";
+      warnings.push_back(
+          lines ? face + "its points lie along lines, and between them the fitted normal is up to " + angle +
+                      "° from what the neighbouring lines show (only the smoothing holds the fit across them): " + rows +
+                      "measure lines closer together, or across these, to settle it"
+                : face + "next to the points left out of its fit, the fitted normal is up to " + angle +
+                      "° from what the centres around them show (the fit swings across the gap they leave): " + rows +
+                      "measure more points there (with the outliers' cause removed) to settle it");
     }
     if (unknown > 0) {
       warnings.push_back(face + std::to_string(unknown) + " row" + (unknown == 1 ? "" : "s") +
-                         " next to the points left out of its fit could not be checked against the centres around "
-                         "them (too few, or along one line): their u holds the whole tip radius");
+                         (lines ? " along its scan lines" : " next to the points left out of its fit") +
+                         " could not be checked against the centres around them (too few, or along one line): their "
+                         "u holds the whole tip radius");
     }
   }
 }

@@ -31,7 +31,7 @@ struct Grid {
 TEST(NormalSupport, NothingLeftOutChecksNothing) {
   const nurbs::Surface plane = nurbs::make_plane_patch({0, 0, 0}, {20, 0, 0}, {0, 20, 0});
   const Grid g(plane, 30);
-  EXPECT_TRUE(normal_disagreement(plane, g.points, g.params, std::vector<double>(g.points.size(), 1.0)).empty());
+  EXPECT_TRUE(normal_disagreement(plane, g.points, g.params, std::vector<double>(g.points.size(), 1.0)).angle.empty());
 }
 
 TEST(NormalSupport, OnTheExactCylinderTheNormalsAgree) {
@@ -45,7 +45,7 @@ TEST(NormalSupport, OnTheExactCylinderTheNormalsAgree) {
     const Point3 p = g.points[k];
     g.points[k] += (0.1 + 0.3 * left_out) * Vector3(p.x(), p.y(), 0.0).normalized();
   }
-  const std::vector<double> angle = normal_disagreement(cylinder, g.points, g.params, weights);
+  const std::vector<double> angle = normal_disagreement(cylinder, g.points, g.params, weights).angle;
   ASSERT_EQ(angle.size(), g.points.size());
   for (std::size_t k = 0; k < angle.size(); ++k) {
     ASSERT_FALSE(std::isnan(angle[k])) << k;
@@ -70,7 +70,7 @@ TEST(NormalSupport, AFitTiltedByAKnownAngleDisagreesByThatAngleNearAGapAndNowher
   weights[gap] = 0.0;
   const double spacing = 0.8 * 25.0 / (n - 1);
   const double reach = NormalCheck{}.reach_spacings * spacing;
-  const std::vector<double> angle = normal_disagreement(tilted, g.points, g.params, weights);
+  const std::vector<double> angle = normal_disagreement(tilted, g.points, g.params, weights).angle;
   ASSERT_EQ(angle.size(), g.points.size());
   for (std::size_t k = 0; k < angle.size(); ++k) {
     const double d = (g.points[k] - g.points[gap]).norm();
@@ -94,11 +94,61 @@ TEST(NormalSupport, PointsAlongOneLineCannotTell) {
   }
   std::vector<double> weights(points.size(), 1.0);
   weights[100] = 0.0;
-  const std::vector<double> angle = normal_disagreement(plane, points, params, weights);
-  ASSERT_EQ(angle.size(), points.size());
-  EXPECT_TRUE(std::isnan(angle[100]));
-  EXPECT_TRUE(std::isnan(angle[99]));
-  EXPECT_EQ(angle[0], 0.0);  // beyond reach: not checked
+  const NormalDisagreement check = normal_disagreement(plane, points, params, weights);
+  ASSERT_EQ(check.angle.size(), points.size());
+  // Sampled along a line: every point is checked, and none can be told.
+  EXPECT_TRUE(check.along_lines);
+  for (const double a : check.angle) EXPECT_TRUE(std::isnan(a));
+}
+
+// Scan lines on the plane z = 0: `lines` lines `gap` mm apart along y, a point every 0.2 mm along x.
+struct Lines {
+  std::vector<Point3> points;
+  std::vector<fitting::SurfaceParameter> params;
+  Lines(const nurbs::Surface& plane, int lines, double gap) {
+    for (int l = 0; l < lines; ++l) {
+      for (int i = 0; i <= 100; ++i) {
+        const double u = (2.0 + 0.2 * i) / 25.0, v = (2.0 + gap * l) / 25.0;
+        points.push_back(nurbs::evaluate(plane, u, v));
+        params.push_back({u, v});
+      }
+    }
+  }
+};
+
+TEST(NormalSupport, AlongScanLinesEveryPointIsCheckedAgainstTheNeighbouringLines) {
+  // Five lines 4 mm apart, nothing left out. The exact plane agrees with them; a plane turned 10° about x (the
+  // lines' direction) disagrees by 10° at every point, though it passes through each line's middle row of points
+  // as closely as the exact one passes through all: what a fit swinging between the lines looks like to them.
+  const nurbs::Surface plane = nurbs::make_plane_patch({0, 0, 0}, {25, 0, 0}, {0, 25, 0});
+  const Lines g(plane, 5, 4.0);
+  const std::vector<double> weights(g.points.size(), 1.0);
+  const NormalDisagreement exact = normal_disagreement(plane, g.points, g.params, weights);
+  EXPECT_TRUE(exact.along_lines);
+  ASSERT_EQ(exact.angle.size(), g.points.size());
+  for (std::size_t k = 0; k < g.points.size(); ++k) EXPECT_LT(exact.angle[k], 1e-9) << k;
+
+  const double alpha = 10.0 * std::numbers::pi / 180.0;
+  const nurbs::Surface tilted =
+      nurbs::make_plane_patch({0, 12.5 - 12.5 * std::cos(alpha), -12.5 * std::sin(alpha)}, {25, 0, 0},
+                              {0, 25 * std::cos(alpha), 25 * std::sin(alpha)});
+  const NormalDisagreement swung = normal_disagreement(tilted, g.points, g.params, weights);
+  ASSERT_EQ(swung.angle.size(), g.points.size());
+  for (std::size_t k = 0; k < g.points.size(); ++k) EXPECT_NEAR(swung.angle[k], alpha, 1e-9) << k;
+  // Checking one point in ten (as on a million points), the others take a checked neighbour's angle.
+  NormalCheck few;
+  few.max_line_checks = g.points.size() / 10;
+  const NormalDisagreement sampled = normal_disagreement(tilted, g.points, g.params, weights, few);
+  ASSERT_EQ(sampled.angle.size(), g.points.size());
+  for (std::size_t k = 0; k < g.points.size(); ++k) EXPECT_NEAR(sampled.angle[k], alpha, 1e-9) << k;
+}
+
+TEST(NormalSupport, AGridOrRandomPointsAreNotLines) {
+  const nurbs::Surface plane = nurbs::make_plane_patch({0, 0, 0}, {20, 0, 0}, {0, 20, 0});
+  const Grid g(plane, 30);
+  std::vector<double> weights(g.points.size(), 1.0);
+  weights[300] = 0.0;
+  EXPECT_FALSE(normal_disagreement(plane, g.points, g.params, weights).along_lines);
 }
 
 }  // namespace

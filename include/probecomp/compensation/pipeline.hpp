@@ -178,9 +178,12 @@ struct FaceFit {
   std::vector<fitting::SurfaceParameter> params;   // theirs: on the fit when fitted, else the registration's
   std::vector<char> trusted;                       // per member: 0 where left out as an outlier
   std::vector<char> in_last_fit;                   // per member: 1 where the last fit used it
-  // Per member, when points were left out of the fit: the angle (radians) between the fit's normal and what the
-  // centres around it show (compensation/normal_support.hpp); NaN where it could not be told. Else empty.
+  // Per member, when points were left out of the fit or lie along lines: the angle (radians) between the fit's
+  // normal and what the centres around it show (compensation/normal_support.hpp); NaN where it could not be told.
+  // Else empty.
   std::vector<double> normal_angle;
+  // The points lie along lines (a scanning probe's), and each on a line was checked so (normal_support.hpp).
+  bool normal_checked_along_lines = false;
   std::optional<fitting::AdaptiveFitResult> fit;   // when the face was fitted
   FaceReport report;
 };
