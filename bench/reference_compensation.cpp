@@ -28,21 +28,6 @@ Vector3 normal_derivative(const nurbs::Surface& S, double u, double v, bool alon
   return outward * (nurbs::unit_normal(S, u + du, v + dv).n - nurbs::unit_normal(S, u - du, v - dv).n) / (2.0 * h);
 }
 
-double length_along(const nurbs::Surface& s, bool along_u) {
-  const nurbs::Domain d = s.domain();
-  constexpr int kSteps = 200;
-  double length = 0.0;
-  Point3 previous = Point3::Zero();
-  for (int k = 0; k <= kSteps; ++k) {
-    const double f = static_cast<double>(k) / kSteps;
-    const Point3 x = along_u ? nurbs::evaluate(s, d.u0 + f * (d.u1 - d.u0), 0.5 * (d.v0 + d.v1))
-                             : nurbs::evaluate(s, 0.5 * (d.u0 + d.u1), d.v0 + f * (d.v1 - d.v0));
-    if (k > 0) length += (x - previous).norm();
-    previous = x;
-  }
-  return length;
-}
-
 }  // namespace
 
 ReferenceScore score_reference(const studies::ShapeCaseResult& s, bool adaptive) {
@@ -53,7 +38,7 @@ ReferenceScore score_reference(const studies::ShapeCaseResult& s, bool adaptive)
   const geometry::RigidTransform& T = s.cad.registration.transform;  // CAD to machine
   const geometry::RigidTransform to_cad = T.inverse();
   const nurbs::Domain d = S.domain();
-  const double Lu = length_along(S, true), Lv = length_along(S, false);
+  const double Lu = simulation::length_along(S, true), Lv = simulation::length_along(S, false);
 
   // Each raw centre's height above the nominal along its normal, at its foot point, in the CAD frame.
   const std::size_t n = s.touches.size();

@@ -34,22 +34,6 @@ nurbs::Surface hood_surface() {
   return nurbs::Surface(std::move(U), std::move(V), P, {});
 }
 
-// The length of the face along u at the middle v (along_u) or along v at the middle u, mm.
-double length_along(const nurbs::Surface& s, bool along_u) {
-  const nurbs::Domain d = s.domain();
-  constexpr int kSteps = 200;
-  double length = 0.0;
-  Point3 previous = Point3::Zero();
-  for (int k = 0; k <= kSteps; ++k) {
-    const double f = static_cast<double>(k) / kSteps;
-    const Point3 x = along_u ? nurbs::evaluate(s, d.u0 + f * (d.u1 - d.u0), 0.5 * (d.v0 + d.v1))
-                             : nurbs::evaluate(s, 0.5 * (d.u0 + d.u1), d.v0 + f * (d.v1 - d.v0));
-    if (k > 0) length += (x - previous).norm();
-    previous = x;
-  }
-  return length;
-}
-
 // The unit tangent at (u, v) (fractions of the domain) at `angle` degrees from S_u towards S_v.
 Vector3 tangent_at(const nurbs::Surface& s, double u, double v, double angle) {
   const nurbs::Domain d = s.domain();
@@ -158,6 +142,21 @@ std::string describe(const FeatureSpec& f) {
       break;
   }
   return text;
+}
+
+double length_along(const nurbs::Surface& s, bool along_u) {
+  const nurbs::Domain d = s.domain();
+  constexpr int kSteps = 200;
+  double length = 0.0;
+  Point3 previous = Point3::Zero();
+  for (int k = 0; k <= kSteps; ++k) {
+    const double f = static_cast<double>(k) / kSteps;
+    const Point3 x = along_u ? nurbs::evaluate(s, d.u0 + f * (d.u1 - d.u0), 0.5 * (d.v0 + d.v1))
+                             : nurbs::evaluate(s, 0.5 * (d.u0 + d.u1), d.v0 + f * (d.v1 - d.v0));
+    if (k > 0) length += (x - previous).norm();
+    previous = x;
+  }
+  return length;
 }
 
 geometry::RigidTransform ShapeCase::placement() const {

@@ -70,6 +70,10 @@ struct ShapeCase {
   [[nodiscard]] geometry::RigidTransform placement() const;
 };
 
+// The length of a face along u at its middle v (along_u), or along v at its middle u, mm: its size in each
+// direction of its parameters.
+[[nodiscard]] double length_along(const nurbs::Surface& s, bool along_u);
+
 // The deformation of `c`'s features on its base surface (positions and directions taken on the nominal face).
 [[nodiscard]] Deformation deformation_of(const ShapeCase& c, const cad::Model& nominal);
 // Its programmed points, in measurement order.
