@@ -100,7 +100,29 @@ bool on_a_line(const geometry::OwnedPointTree& tree, std::size_t i, const Normal
   return e[2] > 0.0 && e[1] < check.line_variance_ratio * e[2];
 }
 
+// Whether a quarter of a fixed sample of the tree's points lie on lines (NormalCheck::line_share).
+bool sampled_along_lines(const geometry::OwnedPointTree& tree, const NormalCheck& check) {
+  const std::size_t n = tree.cloud.points.size();
+  if (n < 3) return false;
+  const std::size_t stride = std::max<std::size_t>(1, n / kSpacingSamples);
+  const std::size_t sampled = (n + stride - 1) / stride;
+  std::vector<char> sample_on_line(sampled, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sampled, 256), [&](const auto& range) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> dist_sq;
+    for (std::size_t j = range.begin(); j != range.end(); ++j) sample_on_line[j] = on_a_line(tree, j * stride, check, idx, dist_sq);
+  });
+  const auto lined = std::count(sample_on_line.begin(), sample_on_line.end(), 1);
+  return static_cast<double>(lined) >= check.line_share * static_cast<double>(sampled);
+}
+
 }  // namespace
+
+bool sampled_along_lines(std::span<const Point3> centres, const NormalCheck& check) {
+  if (centres.size() < 3) return false;
+  const geometry::OwnedPointTree tree(std::vector<Point3>(centres.begin(), centres.end()));
+  return sampled_along_lines(tree, check);
+}
 
 NormalDisagreement normal_disagreement(const nurbs::Surface& fit, std::span<const Point3> centres,
                                         std::span<const fitting::SurfaceParameter> params,
@@ -125,27 +147,14 @@ NormalDisagreement normal_disagreement(const nurbs::Surface& fit, std::span<cons
 
   // Sampled along lines? Decided on a fixed sample of points; then each point on a line is found.
   std::vector<char> on_line;
-  {
-    const std::size_t stride = std::max<std::size_t>(1, kept.size() / kSpacingSamples);
-    const std::size_t sampled = (pts.size() + stride - 1) / stride;
-    std::vector<char> sample_on_line(sampled, 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sampled, 256), [&](const auto& range) {
-      std::vector<std::uint32_t> idx;
-      std::vector<double> dist_sq;
-      for (std::size_t j = range.begin(); j != range.end(); ++j) {
-        sample_on_line[j] = on_a_line(in_fit, j * stride, check, idx, dist_sq);
-      }
+  out.along_lines = sampled_along_lines(in_fit, check);
+  if (out.along_lines) {
+    on_line.assign(pts.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size(), 1024), [&](const auto& range) {
+      std::vector<std::uint32_t> i2;
+      std::vector<double> d2;
+      for (std::size_t i = range.begin(); i != range.end(); ++i) on_line[i] = on_a_line(in_fit, i, check, i2, d2);
     });
-    const auto lined = std::count(sample_on_line.begin(), sample_on_line.end(), 1);
-    out.along_lines = static_cast<double>(lined) >= check.line_share * static_cast<double>(sampled);
-    if (out.along_lines) {
-      on_line.assign(pts.size(), 0);
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size(), 1024), [&](const auto& range) {
-        std::vector<std::uint32_t> i2;
-        std::vector<double> d2;
-        for (std::size_t i = range.begin(); i != range.end(); ++i) on_line[i] = on_a_line(in_fit, i, check, i2, d2);
-      });
-    }
   }
   if (left_out.empty() && !out.along_lines) return out;
   std::vector<double>& angle = out.angle;

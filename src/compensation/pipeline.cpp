@@ -552,10 +552,16 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     const std::vector<std::uint32_t> nearest = rep.repeated == 0 ? std::move(around.nearest) : fitting::nearest_neighbours(pts);
     around = {};
     std::vector<char> in_fit;  // per fitted point: 1 where the last fit used it
+    // Points along a scanning probe's lines are predicted from their own line's neighbours whatever the fit does
+    // between the lines: their smoothing is chosen by leaving a knot span's points out at once (penalized.hpp).
+    // Elsewhere a point alone: a narrow, steep feature on a grid wants the fit that leave-one-out chooses (a dent of
+    // 19° flanks without noise: largest error 0.5 µm, against 4.5 µm left out by spans).
+    fitting::AdaptiveFitOptions surface = options.surface;
+    if (sampled_along_lines(pts)) surface.fit.cross_validation = fitting::CrossValidation::LeaveSpanOut;
     auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at) {
       in_fit.resize(pts.size());
       for (std::size_t j = 0; j < pts.size(); ++j) in_fit[j] = weights[j] > 0.0;
-      fit = fitting::fit_surface(from, pts, at, weights, options.surface, nearest);
+      fit = fitting::fit_surface(from, pts, at, weights, surface, nearest);
       ++rep.fits;
       rep.rounds += fit->rounds;
     };

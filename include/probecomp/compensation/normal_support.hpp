@@ -58,6 +58,10 @@ struct NormalDisagreement {
   bool along_lines = false;  // the face is sampled along lines, and every point on one was checked
 };
 
+// Whether the points lie along lines (a scanning probe's): a quarter of a fixed sample of them each with its
+// nearest neighbours on a line (NormalCheck::line_neighbours, line_variance_ratio, line_share).
+[[nodiscard]] bool sampled_along_lines(std::span<const Point3> centres, const NormalCheck& check = {});
+
 // Per point (`centres` and `params` as fitted, `weights` as given to the fit: zero for points left out): the angle
 // (radians, 0 to π/2) between `fit`'s normal at the point's parameters and the local models' normals there, for
 // left-out points, in-fit points near them and, on a face sampled along lines, points on a line; 0 elsewhere. NaN

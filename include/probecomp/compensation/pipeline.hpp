@@ -162,6 +162,8 @@ struct FitOptions {
   //  - no parameter correction: projecting the points on the fit lets those at the data's corners slide out
   //    into the ill-determined spans (largest error 0.36 mm with two corrections at σ = 10 µm, 0.017 mm
   //    without), and the registration's (u, v) serve as well elsewhere at half the fitting time.
+  // (Where the points lie along lines, fit_faces chooses the smoothing by leaving out a knot span's points at once:
+  // fitting::CrossValidation::LeaveSpanOut.)
   fitting::AdaptiveFitOptions surface{.fit = {}, .parameter_corrections = 0};
   // A face is fitted when it holds at least this many points per control point of its offset surface; fewer
   // cannot average the noise out (its points fall back to the nominal normal).

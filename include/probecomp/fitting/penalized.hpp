@@ -12,7 +12,8 @@
 // penalise a displacement that is linear on the domain, so a broad tilt or bulge costs little; ε (a whisker)
 // only makes the system definite where no point and no curvature fixes a control point.
 //
-// λ minimises the leave-one-out cross-validation score (Allen's PRESS; Wahba, "Spline Models for Observational
+// λ minimises a cross-validation score (leave-one-out by default; leave-span-out on request, see CrossValidation),
+// the leave-one-out one being (Allen's PRESS; Wahba, "Spline Models for Observational
 // Data", 1990, ch. 4) CV(λ) = Σ w_k |r_k|² / (1 − h_k)², h_k the diagonal of the hat matrix H mapping the data to
 // the fitted values: the λ whose fit predicts left-out points best, needing no noise estimate. (Not the
 // generalised form, which replaces each h_k by their mean: on scattered points and a fine basis it cannot see a
@@ -30,6 +31,13 @@
 
 namespace probecomp::fitting {
 
+// How the smoothing is chosen: the λ whose fit best predicts points left out of it.
+enum class CrossValidation {
+  LeaveOneOut,   // each point alone (Allen's PRESS)
+  LeaveSpanOut,  // every point of a knot span at once: predicted from farther points, as the fit between scan
+                 // lines is (see leave_span_out in penalized.cpp)
+};
+
 struct PenalizedFitOptions {
   // A fixed smoothing (log10 of λ relative to trace(AᵀWA) / trace(G)); empty: chosen by cross-validation in the
   // range below.
@@ -44,6 +52,7 @@ struct PenalizedFitOptions {
   int golden_steps = 6;
   // ε relative to the mean diagonal of AᵀWA: far below any data's weight on a control point.
   double ridge = 1e-9;
+  CrossValidation cross_validation = CrossValidation::LeaveOneOut;
 };
 
 struct PenalizedFitResult {
