@@ -20,6 +20,7 @@
 // with a u of 0.1 µm). Their local models take neighbours from enough lines to span a surface.
 
 #include <cstddef>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -50,6 +51,8 @@ struct NormalCheck {
   std::size_t max_line_checks = 20000;
   double line_variance_ratio = 1e-2;
   double line_share = 0.25;
+  // Whether the points lie along lines, when the caller has decided it (sampled_along_lines); empty: decided here.
+  std::optional<bool> along_lines{};
 };
 
 struct NormalDisagreement {
@@ -58,8 +61,9 @@ struct NormalDisagreement {
   bool along_lines = false;  // the face is sampled along lines, and every point on one was checked
 };
 
-// Whether the points lie along lines (a scanning probe's): a quarter of a fixed sample of them each with its
-// nearest neighbours on a line (NormalCheck::line_neighbours, line_variance_ratio, line_share).
+// Whether the points lie along lines (a scanning probe's): a quarter of the points tested each with its nearest
+// neighbours on a line (NormalCheck::line_neighbours, line_variance_ratio, line_share), those tested being the
+// points of 16 small blocks spread over the set.
 [[nodiscard]] bool sampled_along_lines(std::span<const Point3> centres, const NormalCheck& check = {});
 
 // Per point (`centres` and `params` as fitted, `weights` as given to the fit: zero for points left out): the angle
