@@ -65,9 +65,9 @@ TEST(CrossValidation, OnScanLinesLeavingSpansOutKeepsTheNormalsBetweenTheLines) 
   const nurbs::ClosestPointSolver on_start(start), on_truth(truth.surface);
   std::mt19937_64 rng(5);
   std::normal_distribution<double> noise(0.0, 0.003);
-  for (int l = 0; l < 41; ++l) {  // 41 lines 4.5 mm apart over the 200 mm panel, a point every 0.4 mm along
-    for (int k = 0; k < 450; ++k) {
-      const double u = 0.05 + 0.9 * k / 449.0, v = 0.05 + 0.9 * l / 40.0;
+  for (int l = 0; l < 21; ++l) {  // 21 lines 4.5 mm apart over 90 mm of the 200 mm panel, a point every 0.4 mm
+    for (int k = 0; k < 225; ++k) {
+      const double u = 0.35 + 0.45 * k / 224.0, v = 0.35 + 0.45 * l / 20.0;
       const Point3 x = nurbs::evaluate(truth.surface, u, v) + Vector3(noise(rng), noise(rng), noise(rng));
       const nurbs::ClosestPointResult foot = on_start.closest_point(x);
       points.push_back(x);
@@ -93,10 +93,10 @@ TEST(CrossValidation, OnScanLinesLeavingSpansOutKeepsTheNormalsBetweenTheLines) 
   const double by_points = worst_normal_degrees(CrossValidation::LeaveOneOut);
   std::printf("scan lines 4.5 mm apart, sigma 3 um: worst normal error %.3f deg leaving spans out, %.3f deg leaving "
               "points out\n", by_spans, by_points);
-  // The dent's flanks slope up to 0.3/6·e^(−1/2) = 1.7°: the fit follows them between the lines to well within that
-  // (1.5° makes r(1 − cos θ) 0.34 µm for r = 1 mm). (Leaving points out does as well here; on the shape suite's
-  // lines it does not: ShapeSuite.ScanLinesAtThreeMicrometresAreFollowed.)
-  EXPECT_LT(by_spans, 1.5);
+  // The dent's flanks slope up to 0.3/6·e^(−1/2) = 1.7°: the fit follows them between the lines to a small part of
+  // that (measured 0.18°, and 0.45° leaving points out; on the shape suite's lines leaving points out swings far
+  // more: ShapeSuite.ScanLinesAtThreeMicrometresAreFollowed). 0.5° makes r(1 − cos θ) 38 nm for r = 1 mm.
+  EXPECT_LT(by_spans, 0.5);
 }
 
 }  // namespace
