@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "reference_compensation.hpp"
+#include "probecomp/geometry/statistics.hpp"
 #include "probecomp/simulation/shape_suite.hpp"
 #include "probecomp/studies/shape_suite_study.hpp"
 
@@ -32,10 +33,8 @@ struct Row {
 };
 
 double median(std::vector<double> v) {
-  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+  std::erase_if(v, [](double x) { return !std::isfinite(x); });
+  return v.empty() ? std::nan("") : geometry::median_in_place(v);
 }
 
 double worst(const std::vector<double>& v, bool largest) {

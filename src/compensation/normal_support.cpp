@@ -210,17 +210,19 @@ NormalDisagreement normal_disagreement(const nurbs::Surface& fit, std::span<cons
   // Points on lines beyond check.max_line_checks are checked every stride-th in that order, and the others take the angle of
   // the last one checked before them (a neighbour in the tree's leaf: the angle changes over the lines' spacing, not
   // from point to point along a line).
+  // In-fit point i is checked for being on a line, not for being near a gap.
+  auto line_only = [&](std::uint32_t i) { return !on_line.empty() && on_line[i] && !near_gap[i]; };
   std::vector<std::uint32_t> checked, copied_from_previous;
   {
     std::size_t on_lines = 0;
-    for (const std::uint32_t i : in_fit.tree.vAcc) on_lines += !on_line.empty() && on_line[i] && !near_gap[i];
+    for (const std::uint32_t i : in_fit.tree.vAcc) on_lines += line_only(i);
     const std::size_t most = std::max<std::size_t>(check.max_line_checks, 1);
     const std::size_t stride = (on_lines + most - 1) / most;
     std::size_t seen = 0;
     for (const std::uint32_t i : in_fit.tree.vAcc) {
       if (near_gap[i]) {
         checked.push_back(kept[i]);
-      } else if (!on_line.empty() && on_line[i]) {
+      } else if (line_only(i)) {
         (seen++ % std::max<std::size_t>(stride, 1) == 0 ? checked : copied_from_previous).push_back(kept[i]);
       }
     }
@@ -273,7 +275,7 @@ NormalDisagreement normal_disagreement(const nurbs::Surface& fit, std::span<cons
       const std::uint32_t k = kept[i];
       if (is_copied[k]) {
         angle[k] = last;
-      } else if (!on_line.empty() && on_line[i] && !near_gap[i]) {
+      } else if (line_only(i)) {
         last = angle[k];
       }
     }

@@ -273,6 +273,8 @@ struct CvRows {
   // point's basis again: the same numbers.
   static constexpr std::uint32_t kNoRow = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> row_of_point;
+  // Where each knot span's rows begin (rows are in span order), and the end: for leave-span-out.
+  std::vector<std::size_t> span_starts;
   [[nodiscard]] bool cover_every_point() const { return !row_of_point.empty(); }
 };
 
@@ -498,6 +500,10 @@ CvRows cv_rows(const Surface& s, std::span<const Point3> net, const Ordering& or
       rows.w[at] = weights.empty() ? 1.0 : weights[k];
     }
   });
+  for (std::size_t r = 0; r < chosen.size(); ++r) {
+    if (r == 0 || rows.idx[r * m] != rows.idx[(r - 1) * m]) rows.span_starts.push_back(r);
+  }
+  rows.span_starts.push_back(chosen.size());
   if (stride == 1) {
     rows.row_of_point.assign(n_points, CvRows::kNoRow);
     for (std::size_t r = 0; r < chosen.size(); ++r) rows.row_of_point[chosen[r]] = static_cast<std::uint32_t>(to[r]);
@@ -609,13 +615,7 @@ double leave_span_out_terms(const CvRows& rows, const std::vector<std::size_t>& 
 // 0.29 mm off). A span's points left out together must be predicted from other lines, as the fit between the lines
 // is.
 double leave_span_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b) {
-  const std::size_t mm = static_cast<std::size_t>(rows.m);
-  const std::size_t n_rows = rows.y.size();
-  std::vector<std::size_t> starts;
-  for (std::size_t i = 0; i < n_rows; ++i) {
-    if (i == 0 || rows.idx[i * mm] != rows.idx[(i - 1) * mm]) starts.push_back(i);
-  }
-  starts.push_back(n_rows);
+  const std::vector<std::size_t>& starts = rows.span_starts;
   const std::size_t spans = starts.size() - 1;
   // Fixed groups of spans summed in order: the same sum for any thread count.
   constexpr std::size_t kSpansPerGroup = 32;
