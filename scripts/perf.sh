@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Whole-process speed and memory of `probecomp compensate` (the README's performance table): the demo's panel
+# Whole-process speed and memory of `probecomp compensate` (the performance table, docs/performance.md): the demo's panel
 # simulated at 10 000 and 1 000 000 points (misaligned 0.2 mm / 1.5°, a 0.3 mm bump, σ = 4.5 µm), each compensated
 # RUNS times; prints the wall time and peak RSS (/usr/bin/time) and the JSON's stage timings of every run, and the
 # errors against the simulation's truth of the last. Uses an existing Release build (default build/).

@@ -16,7 +16,7 @@ namespace {
 constexpr int kLengthSamples = 64;
 constexpr int kIsoCurves = 5;
 // A face may not receive more than this many points (a tiny spacing on a large face is a mistake). Twice the
-// 10 M points of a dense scan of one panel, the largest case compensate is measured on (README, Performance).
+// 10 M points of a dense scan of one panel, the largest case compensate is measured on (docs/performance.md).
 constexpr long kMaxPointsPerFace = 20'000'000;
 
 double longest_iso_length(const nurbs::Surface& s, const nurbs::Domain& d, bool along_u) {
