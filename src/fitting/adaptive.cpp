@@ -211,6 +211,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       // The points moved along the surface by a fraction of their spacing: the smoothing is sought within
       // kCorrectionBracket decades of the last (golden sections only: 8 fits, against 17 for the full search).
       PenalizedFitOptions near = fit_options;
+      near.log10_anisotropy = fit.log10_anisotropy;
       if (!options.fit.log10_smoothing) {
         near.min_log10_smoothing = std::max(fit_options.min_log10_smoothing, fit.log10_smoothing - kCorrectionBracket);
         near.max_log10_smoothing = std::min(fit_options.max_log10_smoothing, fit.log10_smoothing + kCorrectionBracket);
@@ -437,7 +438,9 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       }
       span_weight = std::move(w);
     }
-    // Later rounds change the fit locally: the smoothing is sought near the last one.
+    // Later rounds change the fit locally: the smoothing is sought near the last one, and the anisotropy, which
+    // is the face's deformation's (a wave's or a crease's direction), kept.
+    fit_options.log10_anisotropy = fit.log10_anisotropy;
     if (!options.fit.log10_smoothing) {
       fit_options.min_log10_smoothing = std::max(options.fit.min_log10_smoothing, fit.log10_smoothing - 2.0);
       fit_options.max_log10_smoothing = std::min(options.fit.max_log10_smoothing, fit.log10_smoothing + 2.0);

@@ -366,12 +366,25 @@ DataTerms assemble_data(const Surface& s, std::span<const Point3> net, const Ord
   return std::move(out);
 }
 
+// The thin-plate energy's three terms, each a band matrix: G(θ) = θ·G_ss + G_st + G_tt/θ (θ = 1: the isotropic
+// energy). θ < 1 lets the fit bend along s more readily than along t: a wave or crease running across the face
+// along t is followed without the freedom to wiggle along it as well.
+struct ThinPlateTerms {
+  Band uu, uv, vv;
+  [[nodiscard]] Band combined(double theta) const {
+    Band G = uv;
+    G.add(uu, theta);
+    G.add(vv, 1.0 / theta);
+    return G;
+  }
+};
+
 // The thin-plate energy's matrix G: Σ_spans φ_s ∫∫_span (R_ss R_ssᵀ + 2 R_st R_stᵀ + R_tt R_ttᵀ) ds dt, s = L_u·u,
 // t = L_v·v, by 5 × 5 Gauss points per span. Chunks of u spans in a fixed number, summed in order.
 // With `D` (n × 3, the displacement of the control net) it also writes each span's roughness of that
 // displacement (its energy over the span's area) to `roughness` and builds no matrix.
-Band thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span<const double> span_weights,
-                       const std::vector<double>* D = nullptr, std::vector<double>* roughness = nullptr) {
+ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span<const double> span_weights,
+                                 const std::vector<double>* D = nullptr, std::vector<double>* roughness = nullptr) {
   const int n = s.num_u() * s.num_v();
   const int p = s.p(), q = s.q();
   const std::vector<double> bu = s.U().breakpoints();
@@ -396,11 +409,11 @@ Band thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span
   // ds dt = Lu Lv du dv; d_ss = d_uu / Lu², d_st = d_uv / (Lu Lv), d_tt = d_vv / Lv².
   const double cuu = Lu * Lv / std::pow(Lu, 4), cuv = 2.0 * Lu * Lv / (Lu * Lu * Lv * Lv), cvv = Lu * Lv / std::pow(Lv, 4);
   const int chunks = std::min(nsu, 8);
-  std::vector<Band> parts(static_cast<std::size_t>(chunks));
+  std::vector<ThinPlateTerms> parts(static_cast<std::size_t>(chunks));
   if (roughness) roughness->assign(static_cast<std::size_t>(nsu) * nsv, 0.0);
   tbb::parallel_for(0, chunks, [&](int c) {
-    Band& G = parts[static_cast<std::size_t>(c)];
-    if (!D) G = Band(n, b);
+    ThinPlateTerms& G = parts[static_cast<std::size_t>(c)];
+    if (!D) G = ThinPlateTerms{Band(n, b), Band(n, b), Band(n, b)};
     RationalBasisD2 d2;
     int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
     const int m = (p + 1) * (q + 1);
@@ -432,9 +445,9 @@ Band thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span
               energy += w * (cuu * duu.squaredNorm() + cuv * duv.squaredNorm() + cvv * dvv.squaredNorm());
               continue;
             }
-            G.add_outer(idx, d2.Ruu, m, w * cuu);
-            G.add_outer(idx, d2.Ruv, m, w * cuv);
-            G.add_outer(idx, d2.Rvv, m, w * cvv);
+            G.uu.add_outer(idx, d2.Ruu, m, w * cuu);
+            G.uv.add_outer(idx, d2.Ruv, m, w * cuv);
+            G.vv.add_outer(idx, d2.Rvv, m, w * cvv);
           }
         }
         // The span's area in mm²: its parameter area times Lu·Lv (jac holds a quarter of the parameter area).
@@ -443,7 +456,11 @@ Band thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span
     }
   });
   if (D) return {};
-  for (int c = 1; c < chunks; ++c) parts[0].add(parts[static_cast<std::size_t>(c)]);
+  for (int c = 1; c < chunks; ++c) {
+    parts[0].uu.add(parts[static_cast<std::size_t>(c)].uu);
+    parts[0].uv.add(parts[static_cast<std::size_t>(c)].uv);
+    parts[0].vv.add(parts[static_cast<std::size_t>(c)].vv);
+  }
   return std::move(parts[0]);
 }
 
@@ -451,6 +468,7 @@ Band thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span
 struct Trial {
   bool ok = false;
   double log10_smoothing = 0.0, lambda = 0.0;
+  double log10_anisotropy = 0.0;
   double rss = 0.0, trace = 0.0, cv_score = std::numeric_limits<double>::infinity();
   std::vector<double> Z;  // the band of the inverse (for tr H, the leverages and the variance factors)
   Band L;                 // the Cholesky factor of AᵀWA + λG + εI (for the smoothing bias)
@@ -700,35 +718,63 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   // are summed from them after they are made, one basis evaluation a point instead of two (its fit 17.3 → 15.9 ms,
   // 15 runs interleaved); else each point's basis row is made for them, side by side with the rows.
   DataTerms data;
-  Band G;
+  ThinPlateTerms terms;
   CvRows rows;
   if (cv_stride(n_points) == 1) {
     tbb::parallel_invoke([&] { rows = cv_rows(start, net, order, points, params, weights); },
-                         [&] { G = thin_plate_energy(start, order, b, span_weights); });
+                         [&] { terms = thin_plate_energy(start, order, b, span_weights); });
     data = assemble_data(start, net, order, b, points, params, weights, &rows);
   } else {
     tbb::parallel_invoke([&] { data = assemble_data(start, net, order, b, points, params, weights, nullptr); },
-                         [&] { G = thin_plate_energy(start, order, b, span_weights); },
+                         [&] { terms = thin_plate_energy(start, order, b, span_weights); },
                          [&] { rows = cv_rows(start, net, order, points, params, weights); });
   }
   if (data.used == 0 || !(data.weight_sum > 0.0)) return result;
   const double data_trace = data.AtWA.trace();
-  const double scale_ratio = data_trace / std::max(G.trace(), 1e-300);
   const double ridge = options.ridge * data_trace / n;
 
   std::atomic<int> evaluations{0};  // trials may run side by side
-  auto run = [&](double t10) {
+  // One trial at relative smoothing t10 and anisotropy a10 (both log10). λ is relative to the trace of G(θ), so a
+  // change of θ alone reshapes the penalty without changing its overall strength.
+  auto run = [&](double t10, double a10) {
     ++evaluations;
-    return evaluate(data, G, scale_ratio, ridge, t10, rows, options.cross_validation);
+    const Band G = terms.combined(std::pow(10.0, a10));
+    Trial t = evaluate(data, G, data_trace / std::max(G.trace(), 1e-300), ridge, t10, rows, options.cross_validation);
+    t.log10_anisotropy = a10;
+    return t;
   };
+  // Golden sections of [lo, hi] for the trial `at(x)` with the smallest score (Kiefer 1953): the score is smooth
+  // and has one minimum in practice once bracketed.
+  auto golden = [&](double lo, double hi, int steps, auto&& at) {
+    constexpr double kGolden = 0.6180339887498949;
+    double x1 = hi - kGolden * (hi - lo), x2 = lo + kGolden * (hi - lo);
+    Trial t1, t2;
+    tbb::parallel_invoke([&] { t1 = at(x1); }, [&] { t2 = at(x2); });
+    for (int step = 0; step < steps; ++step) {
+      if (t1.cv_score <= t2.cv_score) {
+        hi = x2;
+        x2 = x1;
+        t2 = std::move(t1);
+        x1 = hi - kGolden * (hi - lo);
+        t1 = at(x1);
+      } else {
+        lo = x1;
+        x1 = x2;
+        t1 = std::move(t2);
+        x2 = lo + kGolden * (hi - lo);
+        t2 = at(x2);
+      }
+    }
+    return t1.cv_score <= t2.cv_score ? std::move(t1) : std::move(t2);
+  };
+  const double a0 = options.log10_anisotropy.value_or(0.0);
   // Each trial keeps its factor and its band inverse, so the best one is used as it is, not evaluated again.
   Trial best;
   if (options.log10_smoothing) {
-    best = run(*options.log10_smoothing);
+    best = run(*options.log10_smoothing, a0);
   } else {
     // A scan in decades, then golden sections of the best decade's two neighbours. A range no wider than two
     // scan steps (a search near a known λ) is bracketed already: golden sections of it alone.
-    constexpr double kGolden = 0.6180339887498949;
     double lo = options.min_log10_smoothing, hi = options.max_log10_smoothing;
     if (hi - lo > 2.0 * options.scan_step) {
       std::vector<double> scan;
@@ -741,7 +787,7 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
       const std::size_t at_once = trial_bytes * scan.size() <= kParallelScanBytes ? scan.size() : 1;
       for (std::size_t first = 0; first < scan.size(); first += at_once) {
         std::vector<Trial> trials(std::min(at_once, scan.size() - first));
-        tbb::parallel_for(std::size_t{0}, trials.size(), [&](std::size_t k) { trials[k] = run(scan[first + k]); });
+        tbb::parallel_for(std::size_t{0}, trials.size(), [&](std::size_t k) { trials[k] = run(scan[first + k], a0); });
         for (Trial& t : trials) {
           if (t.ok && t.cv_score < best.cv_score) best = std::move(t);
         }
@@ -750,26 +796,21 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
       lo = std::max(best_t - options.scan_step, options.min_log10_smoothing);
       hi = std::min(best_t + options.scan_step, options.max_log10_smoothing);
     }
-    double x1 = hi - kGolden * (hi - lo), x2 = lo + kGolden * (hi - lo);
-    Trial t1, t2;
-    tbb::parallel_invoke([&] { t1 = run(x1); }, [&] { t2 = run(x2); });
-    for (int step = 0; step < options.golden_steps; ++step) {
-      if (t1.cv_score <= t2.cv_score) {
-        hi = x2;
-        x2 = x1;
-        t2 = std::move(t1);
-        x1 = hi - kGolden * (hi - lo);
-        t1 = run(x1);
-      } else {
-        lo = x1;
-        x1 = x2;
-        t1 = std::move(t2);
-        x2 = lo + kGolden * (hi - lo);
-        t2 = run(x2);
+    Trial g = golden(lo, hi, options.golden_steps, [&](double x) { return run(x, a0); });
+    if (g.cv_score <= best.cv_score) best = std::move(g);
+    // Then the anisotropy at that smoothing, and the smoothing once more near it at the anisotropy found.
+    if (options.anisotropic && !options.log10_anisotropy && best.ok) {
+      const double t10 = best.log10_smoothing;
+      Trial a = golden(-options.max_log10_anisotropy, options.max_log10_anisotropy, options.golden_steps,
+                       [&](double x) { return run(t10, x); });
+      if (a.cv_score < best.cv_score) {
+        best = std::move(a);
+        const double a10 = best.log10_anisotropy;
+        Trial t = golden(std::max(t10 - 1.0, options.min_log10_smoothing), std::min(t10 + 1.0, options.max_log10_smoothing),
+                         options.golden_steps, [&](double x) { return run(x, a10); });
+        if (t.cv_score < best.cv_score) best = std::move(t);
       }
     }
-    Trial& golden = t1.cv_score <= t2.cv_score ? t1 : t2;
-    if (golden.cv_score <= best.cv_score) best = std::move(golden);
   }
   result.evaluations = evaluations;
   if (!best.ok) {
@@ -794,6 +835,7 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   result.surface = Surface(start.U(), start.V(), std::move(Pw));
   (void)thin_plate_energy(start, order, b, {}, &best.D, &result.span_roughness);
   result.log10_smoothing = best.log10_smoothing;
+  result.log10_anisotropy = best.log10_anisotropy;
   result.lambda = best.lambda;
   result.effective_dof = best.trace;
   result.cv_score = best.cv_score;
@@ -806,6 +848,7 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   // smoothers' bias: it sees the shape the fit found, which the penalty has shrunk already, so it reads low where
   // the penalty dominates). Two more solves with the factor.
   {
+    const Band G = terms.combined(std::pow(10.0, best.log10_anisotropy));
     auto bias_of = [&](const std::vector<double>& D) {
       std::vector<double> beta(static_cast<std::size_t>(n) * 3, 0.0);
       for (int I = 0; I < n; ++I) {

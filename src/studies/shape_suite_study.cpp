@@ -27,8 +27,7 @@ ShapeCaseResult run_shape_case(const simulation::ShapeCase& c, const compensatio
                                .probe_radius = c.probe_radius,
                                .noise_sigma = c.noise_sigma,
                                .seed = c.seed};
-  const bool normals = c.sampling == simulation::Sampling::Grid ||
-                       (c.sampling == simulation::Sampling::Random && c.approach_normals);
+  const bool normals = c.sampling != simulation::Sampling::ScanLines && c.approach_normals;
   static_cast<MethodComparison&>(out) = compare_methods(m, {.approach_normals = normals, .compensate = options});
 
   const nurbs::Surface& s = out.nominal.faces.at(0).surface;

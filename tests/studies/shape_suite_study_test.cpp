@@ -7,6 +7,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
+
+#include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/error.hpp"
 
 namespace probecomp::studies {
 namespace {
@@ -57,6 +61,79 @@ TEST(ShapeSuite, ScanLinesAtThreeMicrometresAreFollowed) {
   EXPECT_LT(std::abs(r.cad_summary.mean), 0.0004);
   EXPECT_LT(r.cad_summary.max_abs(), 0.020);
   EXPECT_GE(r.coverage_2u, 0.92);
+}
+
+// Issue 49: a face whose material side only the raw centres can tell (no i,j,k, no closed solid), the part up to
+// 3° and 1 mm off its CAD frame. The centres' side of the nominal then decides nothing (1.2° over a 100 mm panel
+// is 2 mm, twice r), and registered to the wrong side every contact came back 2r off and `ok`. Grids and scan
+// lines on the panel and the hood, a broad bulge on each, two poses each: the mean error a fraction of a
+// micrometre, never ±2r. The hood is gently curved and its bulge (0.15 mm) is in both sides' residuals: there the
+// two may fit too alike to tell (measured: 19.1 against 22.0 µm), and then the run is refused, never guessed.
+TEST(ShapeSuite, TheMaterialSideWithoutApproachNormalsDoesNotFlipWithThePose) {
+  std::mt19937_64 rng(49);
+  std::uniform_real_distribution<double> angle(-3.0, 3.0), shift(-0.55, 0.55);
+  int runs = 0, refused = 0;
+  for (const simulation::BaseSurface base : {simulation::BaseSurface::Panel, simulation::BaseSurface::Hood}) {
+    for (const simulation::Sampling sampling : {simulation::Sampling::Grid, simulation::Sampling::ScanLines}) {
+      for (int pose = 0; pose < 2; ++pose) {
+        simulation::ShapeCase c;
+        c.name = "side";
+        c.base = base;
+        c.sampling = sampling;
+        c.points = 1500;
+        c.approach_normals = false;
+        c.noise_sigma = 0.003;
+        c.features = {{.kind = simulation::FeatureSpec::Kind::Bump, .u = 0.4, .v = 0.6, .amplitude = 0.15, .size = 12.0}};
+        c.rx = angle(rng);
+        c.ry = angle(rng);
+        c.rz = angle(rng);
+        c.t = Vector3(shift(rng), shift(rng), shift(rng));
+        c.seed = static_cast<std::uint64_t>(10 + runs);
+        ++runs;
+        const char* what = simulation::to_string(base);
+        try {
+          const ShapeCaseResult r = run_shape_case(c);
+          std::printf("%s %s, turned %.2f, %.2f, %.2f deg: mean %.3f um, std %.2f um; %s\n", what,
+                      simulation::to_string(sampling), c.rx, c.ry, c.rz, r.cad_summary.mean * 1e3,
+                      r.cad_summary.std * 1e3, r.cad.registration.notes.empty() ? "" : r.cad.registration.notes.back().c_str());
+          EXPECT_LT(std::abs(r.cad_summary.mean), 0.0005) << what << " pose " << pose;
+          EXPECT_LT(r.cad_summary.std, 0.004);
+        } catch (const RegistrationError& e) {
+          std::printf("%s %s refused: %s\n", what, simulation::to_string(sampling), e.what());
+          EXPECT_NE(std::string(e.what()).find("cannot tell the material side"), std::string::npos) << e.what();
+          // The panel's curvature shows the side through its bulge (measured: 17.7–18.8 against 33.2–34.8 µm).
+          EXPECT_EQ(base, simulation::BaseSurface::Hood) << e.what();
+          ++refused;
+        }
+      }
+    }
+  }
+  EXPECT_LE(refused, 4);
+}
+
+// A flat plate: its two offset sides are the same plane 2r apart, which a translation takes up exactly, so the
+// centres cannot tell which side the material is on. Refused, with the reason, not guessed.
+TEST(ShapeSuite, AFaceWhoseMaterialSideCannotBeToldIsRefused) {
+  const nurbs::KnotVector U = nurbs::KnotVector::uniform(1, 1), V = nurbs::KnotVector::uniform(1, 1);
+  cad::Model model;
+  model.faces.push_back(cad::Face{
+      .surface = nurbs::Surface(U, V, std::vector<Point3>{Point3(0, 0, 0), Point3(0, 40, 0), Point3(60, 0, 0), Point3(60, 40, 0)})});
+  const geometry::RigidTransform pose = geometry::RigidTransform(
+      Eigen::AngleAxisd(0.02, Vector3(1, 0.5, 0).normalized()) * Eigen::Translation3d(0.2, -0.3, 0.4));
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  std::vector<Point3> centres;
+  for (int i = 0; i < 40; ++i) {
+    for (int j = 0; j < 25; ++j) centres.push_back(pose * Point3(1.5 * i + 0.5, 1.5 * j + 1.0, 1.0 + noise(rng)));
+  }
+  compensation::CompensateOptions options;
+  options.probe_radius = 1.0;
+  try {
+    (void)compensation::compensate(model, centres, std::nullopt, options);
+    ADD_FAILURE() << "a plate's material side was guessed";
+  } catch (const RegistrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot tell the material side"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

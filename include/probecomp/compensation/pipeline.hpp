@@ -100,6 +100,9 @@ struct PrepareOptions {
   fitting::OffsetOptions offset;
   // The first guess of the transform CAD → machine, for the material side's votes (usually the identity).
   geometry::RigidTransform initial = geometry::RigidTransform::Identity();
+  // Every face whose side the raw centres decided (MaterialSource::Data) turned to the other side: the second
+  // hypothesis register_material_sides weighs (issue 49).
+  bool flip_data_sides = false;
 };
 
 // The model the points are registered to. Movable, not copyable: the locator refers to the offset model, and
@@ -147,6 +150,20 @@ struct RegisterOptions {
 [[nodiscard]] registration::RegistrationResult register_centres(const PreparedModel& prepared,
                                                                 std::span<const Point3> raw_centres,
                                                                 const RegisterOptions& options = {});
+
+// Prepared and registered. Where the raw centres alone decided a face's material side (no approach normals, no
+// closed solid: MaterialSource::Data), that vote is only as good as the part's first pose: a panel 1–2° off its CAD
+// frame leaves its centres on both sides of the nominal. So the registration is made to both sides and the one
+// whose residuals' robust scale is clearly the smaller is kept (its registration's notes say so); when neither is,
+// a RegistrationError says that the side cannot be told from these data. Else prepare_model, then register_centres.
+struct PreparedRegistration {
+  PreparedModel prepared;
+  registration::RegistrationResult registration;
+};
+[[nodiscard]] PreparedRegistration prepare_and_register(const cad::Model& model, const geometry::TipRadii& radii,
+                                                        std::span<const Point3> raw_centres,
+                                                        std::optional<std::span<const Vector3>> approach_normals,
+                                                        const PrepareOptions& prepare, const RegisterOptions& options);
 
 // --- fit ---
 

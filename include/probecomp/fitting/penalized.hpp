@@ -6,7 +6,10 @@
 // and D minimises
 //   Σ_k w_k |S(u_k,v_k) − x_k|²  +  λ · E(D)  +  ε |D|²
 // where E is the thin-plate energy of the displacement field on the parameter domain, scaled to millimetres
-// (∫∫ d_ss² + 2 d_st² + d_tt² ds dt with s = L_u·u, t = L_v·v, L the mean speed |S_u|, |S_v| of the start),
+// (∫∫ θ d_ss² + 2 d_st² + d_tt²/θ ds dt with s = L_u·u, t = L_v·v, L the mean speed |S_u|, |S_v| of the start;
+// θ = 1 is the isotropic energy, and θ chosen by cross-validation lets a deformation that varies fast along one
+// direction and slowly along the other, a wave or a crease across the face, be followed without the freedom to
+// wiggle along both: the reference P-spline's two smoothing weights, issue 48),
 // over the whole domain: boundary spans included, each span's share weighted by `span_weights` (a spatially
 // varying penalty: small where the part departs sharply from nominal, large where it does not). E does not
 // penalise a displacement that is linear on the domain, so a broad tilt or bulge costs little; ε (a whisker)
@@ -53,6 +56,11 @@ struct PenalizedFitOptions {
   // ε relative to the mean diagonal of AᵀWA: far below any data's weight on a control point.
   double ridge = 1e-9;
   CrossValidation cross_validation = CrossValidation::LeaveOneOut;
+  // The energy's anisotropy θ (see below), chosen by the same cross-validation after λ unless fixed here (log10)
+  // or turned off (θ = 1). Two decades either way: beyond them one direction's bending costs nothing.
+  bool anisotropic = true;
+  std::optional<double> log10_anisotropy;
+  double max_log10_anisotropy = 2.0;
 };
 
 struct PenalizedFitResult {
@@ -60,6 +68,7 @@ struct PenalizedFitResult {
   Status status = Status::NotDone;
   nurbs::Surface surface;           // the fit (the start surface unless OK)
   double log10_smoothing = 0.0;     // the λ used, relative (see the options)
+  double log10_anisotropy = 0.0;    // the θ used
   double lambda = 0.0;              // the λ used, absolute
   double effective_dof = 0.0;       // tr H: the fit's effective number of parameters per coordinate
   double cv_score = 0.0;            // its cross-validation score (mean squared prediction error), mm²

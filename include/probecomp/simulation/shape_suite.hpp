@@ -60,7 +60,7 @@ struct ShapeCase {
   Sampling sampling = Sampling::Grid;
   int points = 7000;           // about this many (grids and scan lines round to whole rows)
   double line_spacing = 4.0;   // ScanLines, mm
-  bool approach_normals = true;  // Random: whether the CAD method gets i,j,k (scan lines never do)
+  bool approach_normals = true;  // grids and random points: whether the CAD method gets i,j,k (scan lines never do)
   double noise_sigma = 0.0045;   // mm
   double probe_radius = 1.0;     // mm
   // CAD to machine: rotations about x, y, z (degrees, in that order) and a translation (mm).
