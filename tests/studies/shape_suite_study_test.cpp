@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <random>
 
 #include "probecomp/compensation/pipeline.hpp"
@@ -111,15 +112,17 @@ TEST(ShapeSuite, TheMaterialSideWithoutApproachNormalsDoesNotFlipWithThePose) {
   EXPECT_LE(refused, 4);
 }
 
-// A flat plate: its two offset sides are the same plane 2r apart, which a translation takes up exactly, so the
-// centres cannot tell which side the material is on. Refused, with the reason, not guessed.
+// A flat plate: its two offset sides are the same plane 2r apart, which a translation takes up exactly, so only
+// where the centres lie before registration can tell the material side. Turned 4° about a line across its middle,
+// a quarter of them lie on the wrong side of the nominal: refused, with the reason, not guessed.
 TEST(ShapeSuite, AFaceWhoseMaterialSideCannotBeToldIsRefused) {
   const nurbs::KnotVector U = nurbs::KnotVector::uniform(1, 1), V = nurbs::KnotVector::uniform(1, 1);
   cad::Model model;
   model.faces.push_back(cad::Face{
       .surface = nurbs::Surface(U, V, std::vector<Point3>{Point3(0, 0, 0), Point3(0, 40, 0), Point3(60, 0, 0), Point3(60, 40, 0)})});
   const geometry::RigidTransform pose = geometry::RigidTransform(
-      Eigen::AngleAxisd(0.02, Vector3(1, 0.5, 0).normalized()) * Eigen::Translation3d(0.2, -0.3, 0.4));
+      Eigen::Translation3d(30.0, 20.0, 0.3) * Eigen::AngleAxisd(4.0 * std::numbers::pi / 180.0, Vector3(0.2, 1, 0).normalized()) *
+      Eigen::Translation3d(-30.0, -20.0, 0.0));
   std::mt19937_64 rng(7);
   std::normal_distribution<double> noise(0.0, 0.003);
   std::vector<Point3> centres;
