@@ -61,8 +61,10 @@ struct CompensatedPoint {
   // registration's share (registration::normal_variance times its residual variance) in quadrature; for an Outlier
   // or a point the last fit did not use, its residual from the fit too (the reading and the fit disagree by that
   // much, and which is right is not known); next to points left out, r(1 − cos θ) for the fit's normal's
-  // disagreement θ with the centres around it (normal_support.hpp). Where no fit stands behind the point (few points, an edge) the fit's share is the registration's residual scale:
-  // the raw centre's whole scatter about the model. NaN where nothing was computed.
+  // disagreement θ with the centres around it (normal_support.hpp). Where no fit stands behind the point (few
+  // points, an edge) the fit's share is the registration's residual scale: the raw centre's whole scatter about the
+  // model; past a fitted face's edge also how far that face's fit puts the part from the nominal at the rim (the
+  // contact is on the nominal rim). NaN where nothing was computed.
   double uncertainty = std::numeric_limits<double>::quiet_NaN();
   int face = -1;                     // index of the CAD face (cad::Face::index)
   double radius = 0.0;               // the tip radius the point was taken (and compensated) with, mm
