@@ -444,12 +444,15 @@ PreparedRegistration prepare_and_register(const cad::Model& model, const geometr
   PreparedModel first = prepare_model(model, radii, raw, approach_normals, prepare);
   std::string faces;
   for (std::size_t f = 0; f < first.material.size(); ++f) {
-    if (first.material[f].source == cad::MaterialSource::Data) faces += (faces.empty() ? "" : ", ") + std::to_string(f);
+    if (first.material[f].source != cad::MaterialSource::Data) continue;
+    faces += (faces.empty() ? "" : ", ") + std::to_string(first.nominal->faces[f].index);
   }
   if (faces.empty()) {
     registration::RegistrationResult r = register_centres(first, raw, options);
     return {std::move(first), std::move(r)};
   }
+  // The other hypothesis turns every such face at once: a part's open faces are measured in one pose, so the
+  // centres' side of each is wrong or right together, not face by face.
   PrepareOptions other_options = prepare;
   other_options.flip_data_sides = !prepare.flip_data_sides;
   PreparedModel other = prepare_model(model, radii, raw, approach_normals, other_options);
@@ -504,16 +507,14 @@ PreparedRegistration prepare_and_register(const cad::Model& model, const geometr
   if (sound_vote) {
     return keep(first, *a.r, "was decided by " + vote + ", the two sides fitting too alike to tell: " + figures(sa, sb));
   }
-  if (!sound_vote && sb * kSideContrast <= sa) {
+  if (sb * kSideContrast <= sa) {
     return keep(other, *b.r, "was decided by registering to both sides, against the side the centres first lay on: " + figures(sb, sa));
   }
-  if (!sound_vote && sa * kSideContrast <= sb) {
-    return keep(first, *a.r, "was decided by registering to both sides: " + figures(sa, sb));
-  }
-  throw RegistrationError("cannot tell " + which + ": registered to either side, the centres fit " +
-                          "about as well (robust scale of the residuals " +
-                          um(sa) + " and " + um(sb) + "), and before registration " + mm(100.0 * least_share) +
-                          " % of them lie on the first. Give each point's approach normal (i,j,k) or a CAD model whose faces bound a solid");
+  if (sa * kSideContrast <= sb) return keep(first, *a.r, "was decided by registering to both sides: " + figures(sa, sb));
+  throw RegistrationError("cannot tell " + which + ": registered to either side, the centres fit about as well (robust "
+                          "scale of the residuals " + um(sa) + " and " + um(sb) + "), and before registration only " +
+                          mm(100.0 * least_share) + " % of them lie on one side. Give each point's approach normal "
+                          "(i,j,k) or a CAD model whose faces bound a solid");
 }
 
 namespace {
