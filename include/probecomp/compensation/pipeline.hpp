@@ -105,6 +105,9 @@ struct PrepareOptions {
   // Every face whose side the raw centres decided (MaterialSource::Data) turned to the other side: the second
   // hypothesis register_material_sides weighs (issue 49).
   bool flip_data_sides = false;
+  // And these faces (positions) turned, when the raw centres decided them: after registration their centres lay
+  // inside the material (prepare_and_register).
+  std::vector<int> flip_faces{};
 };
 
 // The model the points are registered to. Movable, not copyable: the locator refers to the offset model, and
