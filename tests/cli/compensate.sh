@@ -89,7 +89,7 @@ expect_error "nowhere near" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/f
 expect_error "no_surfaces.stp" "$W/o.csv" "$P" compensate --cad "$W/no_surfaces.stp" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/o.csv"
 expect_error "i,j,k" "$W/o.csv" "$P" compensate --cad "$N" --points "$W/no_ijk.csv" --probe-radius 1 --method conventional --output "$W/o.csv"
 expect_error ".igs, .iges" "$W/a.txt" "$P" fit --cad "$N" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/a.txt"
-# The exit status says what kind of failure it was (README, "Exit status").
+# The exit status says what kind of failure it was (docs/cli.md, "Exit status").
 check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/demo/raw.csv' --probe-radius 0) -eq 2 ]" "exit 2: an option's value"
 check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/nan.csv' --probe-radius 1) -eq 3 ]" "exit 3: bad points"
 check "[ \$(status_of '$P' compensate --cad '$N' --points '$W/far.csv' --probe-radius 1) -eq 3 ]" "exit 3: points nowhere near"
