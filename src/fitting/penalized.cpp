@@ -736,9 +736,14 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   std::atomic<int> evaluations{0};  // trials may run side by side
   // One trial at relative smoothing t10 and anisotropy a10 (both log10). λ is relative to the trace of G(θ), so a
   // change of θ alone reshapes the penalty without changing its overall strength.
+  // The scan's and most trials' penalty is at the starting anisotropy: made once, not once a trial.
+  const double a0 = options.log10_anisotropy.value_or(0.0);
+  const Band G_start = terms.combined(std::pow(10.0, a0));
   auto run = [&](double t10, double a10) {
     ++evaluations;
-    const Band G = terms.combined(std::pow(10.0, a10));
+    std::optional<Band> own;
+    if (a10 != a0) own = terms.combined(std::pow(10.0, a10));
+    const Band& G = own ? *own : G_start;
     Trial t = evaluate(data, G, data_trace / std::max(G.trace(), 1e-300), ridge, t10, rows, options.cross_validation);
     t.log10_anisotropy = a10;
     return t;
@@ -767,7 +772,6 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     }
     return t1.cv_score <= t2.cv_score ? std::move(t1) : std::move(t2);
   };
-  const double a0 = options.log10_anisotropy.value_or(0.0);
   // Each trial keeps its factor and its band inverse, so the best one is used as it is, not evaluated again.
   Trial best;
   if (options.log10_smoothing) {
@@ -848,7 +852,9 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   // smoothers' bias: it sees the shape the fit found, which the penalty has shrunk already, so it reads low where
   // the penalty dominates). Two more solves with the factor.
   {
-    const Band G = terms.combined(std::pow(10.0, best.log10_anisotropy));
+    std::optional<Band> own;
+    if (best.log10_anisotropy != a0) own = terms.combined(std::pow(10.0, best.log10_anisotropy));
+    const Band& G = own ? *own : G_start;
     auto bias_of = [&](const std::vector<double>& D) {
       std::vector<double> beta(static_cast<std::size_t>(n) * 3, 0.0);
       for (int I = 0; I < n; ++I) {
