@@ -33,7 +33,7 @@ namespace {
 
 using namespace probecomp;
 
-// Exit statuses, one per kind of failure (README "Exit status"); CLI11's own for a malformed command line.
+// Exit statuses, one per kind of failure (docs/cli.md, "Exit status"); CLI11's own for a malformed command line.
 constexpr int kExitFailure = 1;       // anything else (a bug, or the system: memory, a file that cannot be written)
 constexpr int kExitUsage = 2;         // an option's value the command cannot use
 constexpr int kExitInput = 3;         // probecomp::InputError: points or options the method cannot use
