@@ -1,5 +1,5 @@
 // Point files in and out at scanning sizes (issue 24), one thread:
-//   BM_WriteCompensatedCsv1M   io::compensated_csv of 1 000 000 computed rows (x,y,z,nx,ny,nz,deviation,u,face,status)
+//   BM_WriteCompensatedCsv1M   results::compensated_csv of 1 000 000 computed rows (x,y,z,nx,ny,nz,deviation,u,face,status)
 //   BM_ReadPointCsv1M          io::read_point_csv of a 1 000 000-row x,y,z,i,j,k file (about 90 MB), from the page cache
 // The text is built in memory; writing it to disk is the file system's (io::OutputFiles).
 
@@ -12,7 +12,8 @@
 
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/io/point_table.hpp"
-#include "probecomp/io/results.hpp"
+#include "probecomp/results/files.hpp"
+#include "probecomp/results/statistics.hpp"
 
 namespace {
 
@@ -43,7 +44,7 @@ void BM_WriteCompensatedCsv1M(benchmark::State& state) {
   table.columns = {"x", "y", "z", "i", "j", "k"};
   std::size_t bytes = 0;
   for (auto _ : state) {
-    const std::string text = io::compensated_csv(table, r);
+    const std::string text = results::compensated_csv(table, r);
     bytes = text.size();
     benchmark::DoNotOptimize(text.data());
   }

@@ -1,14 +1,14 @@
 # Fails when a file includes a probecomp header from a higher layer (cmake -DROOT=DIR -P check_layers.cmake).
 # The layers, lowest first; a file's layer is its folder under ROOT/include/probecomp/ or ROOT/src/. The files
 # at include/probecomp/ itself are error.hpp and version.hpp (below everything) and the umbrella probecomp.hpp
-# (the library's top: io).
-set(layers base geometry nurbs fitting occt cad registration compensation io simulation studies selftest cli python)
+# (the library's top: results).
+set(layers base geometry io nurbs fitting occt cad registration compensation results simulation studies selftest cli python)
 
 function(layer_rank path out)
   if(path MATCHES "^(include/probecomp|src)/([a-z_]+)/")
     list(FIND layers "${CMAKE_MATCH_2}" r)
   elseif(path MATCHES "probecomp\\.hpp$")
-    list(FIND layers io r)
+    list(FIND layers results r)
   else()
     set(r 0)
   endif()

@@ -7,6 +7,8 @@
 //   CadError           a CAD file that cannot be read or used as a model
 //   RegistrationError  the points could not be registered to the model credibly
 //   FitError           a surface that could not be fitted or offset where the caller needs one
+// Where the caller can act on it, an error carries a Hint, which the command line and the Python package put in their
+// own words (an option there, a keyword argument here) after the message.
 
 #include <cstring>
 #include <stdexcept>
@@ -14,9 +16,26 @@
 
 namespace probecomp {
 
+// What the caller can do about an error, beyond what its message says.
+enum class Hint {
+  None,
+  // Give the registration a rough start (a 4 x 4 rigid transform, CAD -> machine), or check the CAD file, the frame
+  // and the probe radius.
+  InitialTransform,
+  // That, or, when the part may really deviate from its model by about the probe radius, accept the doubtful
+  // registration (RegisterOptions::accept_doubtful): the run then goes on with a warning.
+  InitialTransformOrAcceptDoubtful,
+  // The unit the caller declared for a point file disagrees with the file's own statement of it.
+  DeclaredUnit,
+};
+
 class Error : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit Error(const std::string& what, Hint hint = Hint::None) : std::runtime_error(what), hint_(hint) {}
+  [[nodiscard]] Hint hint() const { return hint_; }
+
+ private:
+  Hint hint_;
 };
 
 class InputError : public Error {

@@ -2,7 +2,7 @@
 // probecomp's public API in one header: CAD-based contact-probe radius compensation for CMM data.
 //
 //   const probecomp::CadModel model = probecomp::CadModel::load("part.stp");       // STEP or IGES, in mm
-//   const probecomp::io::PointTable raw = probecomp::io::read_points("raw.csv");  // probe centres (CSV or DMIS)
+//   const probecomp::io::PointTable raw = probecomp::io::read_points("raw.csv");  // probe centres (CSV, DMIS or QIF)
 //   const probecomp::CompensationResult result =
 //       probecomp::compensate(model, raw.points, std::nullopt, {.probe_radius = 1.0});
 //
@@ -14,9 +14,10 @@
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/error.hpp"
 #include "probecomp/geometry/types.hpp"
-#include "probecomp/io/dmis.hpp"
+#include "probecomp/io/point_files.hpp"
 #include "probecomp/io/point_table.hpp"
-#include "probecomp/io/results.hpp"
+#include "probecomp/results/files.hpp"
+#include "probecomp/results/statistics.hpp"
 #include "probecomp/version.hpp"
 
 namespace probecomp {

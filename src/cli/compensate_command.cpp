@@ -18,11 +18,13 @@
 #include "probecomp/io/dmis.hpp"
 #include "probecomp/io/format.hpp"
 #include "probecomp/io/output_files.hpp"
-#include "probecomp/io/report.hpp"
+#include "probecomp/io/point_files.hpp"
+#include "probecomp/results/report.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/io/qif.hpp"
 #include "probecomp/io/progress.hpp"
-#include "probecomp/io/results.hpp"
+#include "probecomp/results/files.hpp"
+#include "probecomp/results/statistics.hpp"
 #include "probecomp/io/text.hpp"
 #include "probecomp/io/transform_file.hpp"
 #include "probecomp/studies/freeform_study.hpp"
@@ -44,11 +46,20 @@ bool has_extension(const std::string& path, std::initializer_list<const char*> e
   return std::any_of(extensions.begin(), extensions.end(), [&](const char* x) { return e == x; });
 }
 
+// --tolerance's band, or the reason it is not one, naming the option.
+results::Tolerance tolerance_band(const std::string& text) {
+  try {
+    return results::parse_tolerance(text);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--tolerance: ") + e.what());
+  }
+}
+
 struct Loaded {
   Stopwatch run;  // the whole command, from before reading
   io::PointTable table;
   cad::Model model;
-  io::RunInputs inputs;  // the probe radius in mm
+  results::RunInputs inputs;  // the probe radius in mm
   std::vector<double> radii;  // each row's tip radius, mm (empty: inputs.probe_radius for every row)
   geometry::RigidTransform initial = geometry::RigidTransform::Identity();  // CAD → machine, the registration's start
   double seconds = 0.0;
@@ -115,7 +126,7 @@ Loaded load(const std::string& cad_path, const std::string& points_path, std::op
   if (l.radii.empty()) {
     l.inputs.tip_radii = {*default_mm};
   } else {
-    l.inputs.tip_radii = io::distinct_radii(l.radii);
+    l.inputs.tip_radii = results::distinct_radii(l.radii);
   }
   l.seconds = l.run.seconds();
   return l;
@@ -148,33 +159,34 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
   bar.update("writing", 1.0 - kWriteShare);
   const Stopwatch clock;
   // CSV, the usual output of a scan, goes to its file block by block; DMIS and QIF are built whole.
-  const bool qif = io::is_qif(a.output), dmis = !a.output.empty() && io::is_dmis(a.output);
-  const std::string text = qif ? io::compensated_qif(l.table, r, a.points)
-                           : dmis ? io::compensated_dmis(l.table, r, a.points)
+  const io::PointFormat format = io::point_format(a.output);
+  const bool qif = format == io::PointFormat::Qif, dmis = !a.output.empty() && format == io::PointFormat::Dmis;
+  const std::string text = qif ? results::compensated_qif(l.table, r, a.points)
+                           : dmis ? results::compensated_dmis(l.table, r, a.points)
                                   : std::string();
-  std::optional<io::Tolerance> tolerance;
-  if (!a.tolerance.empty()) tolerance = io::parse_tolerance(a.tolerance);
+  std::optional<results::Tolerance> tolerance;
+  if (!a.tolerance.empty()) tolerance = tolerance_band(a.tolerance);
   io::OutputFiles files;
   if (!a.output.empty() && !qif && !dmis) {
     files.add_streamed(a.output, [&](std::ostream& out) {
-      io::write_compensated_csv(out, l.table, r, [&](double f) { bar.update("writing", 1.0 - kWriteShare * (1.0 - f)); });
+      results::write_compensated_csv(out, l.table, r, [&](double f) { bar.update("writing", 1.0 - kWriteShare * (1.0 - f)); });
     });
   } else if (!a.output.empty()) {
     files.add(a.output, text);
   }
-  const io::FileTimings timings{.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()};
+  const results::FileTimings timings{.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()};
   if (!a.report.empty()) {
-    io::ReportContext context{.inputs = l.inputs, .tolerance = tolerance, .timings = timings};
-    context.nominal = io::registered_outline(l.model, r.registration.transform);
+    results::ReportContext context{.inputs = l.inputs, .tolerance = tolerance, .timings = timings};
+    context.nominal = results::registered_outline(l.model, r.registration.transform);
     if (l.table.normals) {
       const geometry::TipRadii radii = l.radii.empty() ? geometry::TipRadii(l.inputs.tip_radii.front()) : geometry::TipRadii(l.radii);
       context.conventional = compensation::conventional_contact_points(l.table.points, *l.table.normals, radii);
     }
-    files.add(a.report, io::html_report(r, context));
+    files.add(a.report, results::html_report(r, context));
   }
-  if (!a.json.empty()) files.add(a.json, io::statistics_json(r, l.inputs, timings, tolerance));
+  if (!a.json.empty()) files.add(a.json, results::statistics_json(r, l.inputs, timings, tolerance));
   files.commit();
-  if (a.output.empty()) io::write_compensated_csv(std::cout, l.table, r);
+  if (a.output.empty()) results::write_compensated_csv(std::cout, l.table, r);
   bar.update("done", 1.0);
 }
 
@@ -189,7 +201,7 @@ void print_summary_row(std::ostream& out, const char* name, const studies::Error
 int run_compensate(const CompensateArgs& a) {
   io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}, {"--report", a.report}},
                                  {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform}});
-  if (!a.tolerance.empty()) (void)io::parse_tolerance(a.tolerance);  // a bad band fails before the run
+  if (!a.tolerance.empty()) (void)tolerance_band(a.tolerance);  // a bad band fails before the run
   io::ProgressBar bar(a.quiet);
   const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform, bar);
   const compensation::Method method = a.method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
@@ -215,7 +227,7 @@ int run_fit(const FitArgs& a) {
   io::OutputFiles files;
   files.add(a.output, [&](const std::filesystem::path& temporary) { cad::write_surfaces(temporary, surfaces); });
   if (!a.json.empty()) {
-    files.add(a.json, io::statistics_json(r, l.inputs, {.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()}));
+    files.add(a.json, results::statistics_json(r, l.inputs, {.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()}));
   }
   files.commit();
   return 0;
@@ -273,19 +285,19 @@ int run_demo(const DemoArgs& a) {
   io::PointTable table;  // raw.csv's layout: no carried columns, so compensated_csv reads no row fields
   table.columns = {"x", "y", "z", "i", "j", "k"};
   files.add(dir / "raw.csv", raw_points_csv(r.touches, r.plan, false));
-  files.add(dir / "compensated_cad.csv", io::compensated_csv(table, r.cad));
-  files.add(dir / "compensated_conventional.csv", io::compensated_csv(table, r.conventional));
+  files.add(dir / "compensated_cad.csv", results::compensated_csv(table, r.cad));
+  files.add(dir / "compensated_conventional.csv", results::compensated_csv(table, r.conventional));
   // The report an inspector would read, against a ±0.05 mm band: the bump and the dent the simulation put into the
   // part stand out of it.
-  io::ReportContext context{.inputs = {.cad = (dir / "nominal.igs").string(), .points = (dir / "raw.csv").string(),
+  results::ReportContext context{.inputs = {.cad = (dir / "nominal.igs").string(), .points = (dir / "raw.csv").string(),
                                        .probe_radius = c.probe_radius, .tip_radii = {c.probe_radius}},
-                            .tolerance = io::Tolerance{-0.05, 0.05},
+                            .tolerance = results::Tolerance{-0.05, 0.05},
                             .timings = {.total = seconds}};
-  context.nominal = io::registered_outline(c.nominal, r.cad.registration.transform);
+  context.nominal = results::registered_outline(c.nominal, r.cad.registration.transform);
   std::vector<Point3> conventional;
   for (const compensation::CompensatedPoint& p : r.conventional.points) conventional.push_back(p.contact);
   context.conventional = std::move(conventional);
-  files.add(dir / "report.html", io::html_report(r.cad, context));
+  files.add(dir / "report.html", results::html_report(r.cad, context));
   files.commit();
   t << "\nWrote " << (dir / "nominal.igs").string()
     << ", raw.csv, compensated_cad.csv, compensated_conventional.csv and report.html\n"

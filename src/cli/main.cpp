@@ -23,6 +23,7 @@
 #include "cli/commands.hpp"
 #include "probecomp/io/format.hpp"
 #include "probecomp/io/output_files.hpp"
+#include "probecomp/io/point_files.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/error.hpp"
 #include "probecomp/selftest/selftest.hpp"
@@ -131,8 +132,8 @@ int run_info(const std::string& part, bool json) {
 int run_project(const std::string& part, const std::string& points_file, const std::string& units,
                 const std::string& output) {
   io::check_outputs_spare_inputs({{"--output", output}}, {{"PART", part}, {"--points", points_file}});
-  // Unstated, the unit is the file's own (a "# lengths in UNIT" line), else mm.
-  const io::PointTable table = io::read_point_csv(points_file, units.empty() ? std::nullopt : io::length_unit(units));
+  // Unstated, the unit is the file's own (a "# lengths in UNIT" line, DMIS UNITS, QIF LinearUnit), else mm.
+  const io::PointTable table = io::read_points(points_file, units.empty() ? std::nullopt : io::length_unit(units));
   const double scale = 1.0 / table.unit.mm;  // mm → the points' unit
   const cad::Model model = cli::read_part(part);
   const cad::ModelLocator locator(model);
@@ -201,6 +202,21 @@ int run_plan(const std::string& part, double spacing, const std::string& face_li
   return 0;
 }
 
+// The words a Hint (probecomp/error.hpp) takes on the command line: the options that act on it.
+std::string hint_words(Hint hint) {
+  switch (hint) {
+    case Hint::InitialTransform:
+      return ". Give a rough alignment with --initial-transform T.txt (4 x 4, CAD -> machine), or check the CAD file, "
+             "the frame and the probe radius";
+    case Hint::InitialTransformOrAcceptDoubtful:
+      return ". Give a rough alignment with --initial-transform T.txt (4 x 4, CAD -> machine); if the part really "
+             "deviates from its model by about the probe radius, --accept-doubtful-registration runs on with a warning";
+    case Hint::DeclaredUnit: return " as --units says";
+    case Hint::None: break;
+  }
+  return "";
+}
+
 }  // namespace
 
 constexpr const char* kProbeRadiusHelp =
@@ -248,7 +264,8 @@ int main(int argc, char** argv) {
   CLI::App* project = app.add_subcommand(
       "project", "Closest point on the model for each point (find nominals): x,y,z,nx,ny,nz,distance,face,u,v,status.");
   project->add_option("--cad", part, "CAD file")->required();
-  project->add_option("--points", points, "CSV with a header naming x,y,z (other columns are carried)")->required();
+  project->add_option("--points", points, "Points: CSV with a header naming x,y,z (other columns are carried), DMIS or QIF")
+      ->required();
   project->add_option("--output", output, "Output CSV (default: standard output)");
   std::string project_units;
   project->add_option("--units", project_units,
@@ -402,7 +419,8 @@ int main(int argc, char** argv) {
       return cli::run_simulate(sim);
     }
   } catch (const std::exception& e) {
-    std::cerr << "probecomp: " << e.what() << '\n';
+    const auto* error = dynamic_cast<const Error*>(&e);
+    std::cerr << "probecomp: " << e.what() << (error ? hint_words(error->hint()) : "") << '\n';
     if (dynamic_cast<const CadError*>(&e)) return kExitCad;
     if (dynamic_cast<const RegistrationError*>(&e)) return kExitRegistration;
     if (dynamic_cast<const FitError*>(&e)) return kExitFit;

@@ -15,6 +15,7 @@
 #include "probecomp/io/format.hpp"
 #include "probecomp/io/dmis.hpp"
 #include "probecomp/io/output_files.hpp"
+#include "probecomp/io/point_files.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/simulation/measure.hpp"
 

@@ -11,7 +11,6 @@
 #include <sstream>
 
 #include "probecomp/io/format.hpp"
-#include "probecomp/io/qif.hpp"
 #include "probecomp/io/text.hpp"
 
 namespace probecomp::io {
@@ -206,20 +205,6 @@ bool is_dmis(const std::filesystem::path& path) {
   return e == ".DMO" || e == ".DMI" || e == ".DMS";
 }
 
-PointTable read_points(const std::filesystem::path& path, std::optional<LengthUnit> declared,
-                       const FileProgress& progress, NumberText number_text) {
-  PointTable t;
-  if (is_dmis(path)) {
-    t = read_point_dmis(path, declared);
-  } else if (is_qif(path)) {
-    t = read_point_qif(path, declared);
-  } else {
-    return read_point_csv(path, declared, progress, number_text);
-  }
-  if (number_text == NumberText::Drop) t.drop_number_text();
-  return t;
-}
-
 PointTable read_point_dmis(const std::filesystem::path& path, std::optional<LengthUnit> declared) {
   const std::string name = path.string();
   std::ifstream in(path);
@@ -256,8 +241,8 @@ PointTable read_point_dmis(const std::filesystem::path& path, std::optional<Leng
     const std::string where = name + ":" + std::to_string(s.line) + ": ";
     if (auto u = parse_units(s, name)) {
       if (declared && !(*u == *declared)) {
-        throw InputError(where + "the file says its lengths are in " + u->name + ", not in " + declared->name +
-                         " as --units says");
+        throw InputError(where + "the file says its lengths are in " + u->name + ", not in " + declared->name,
+                         Hint::DeclaredUnit);
       }
       unit = *u;
     } else if (auto x = parse_sensor(s, name, unit)) {

@@ -290,8 +290,8 @@ PointTable read_point_csv(const std::filesystem::path& path, std::optional<Lengt
       const std::optional<LengthUnit> u = length_unit(stated);
       if (!u) throw InputError(where() + "unknown length unit '" + stated + "' (known: mm, cm, meter, inch, feet)");
       if (declared && !(*u == *declared)) {
-        throw InputError(where() + "the file says its lengths are in " + u->name + ", not in " + declared->name +
-                         " as --units says");
+        throw InputError(where() + "the file says its lengths are in " + u->name + ", not in " + declared->name,
+                         Hint::DeclaredUnit);
       }
       layout.unit = *u;
       continue;

@@ -573,7 +573,7 @@ PointTable read_point_qif(const std::filesystem::path& path, std::optional<Lengt
   }
   if (stated && declared && !(*stated == *declared)) {
     throw InputError(src.at(stated_at) + "the file says its lengths are in " + stated->name + ", not in " +
-                     declared->name + " as --units says");
+                     declared->name, Hint::DeclaredUnit);
   }
   t.unit = stated ? *stated : declared.value_or(kMillimetre);
   const bool with_normals = sets.front().normals.has_value();
@@ -644,45 +644,45 @@ std::string points_qif(const PointTable& t) {
   return finish(d);
 }
 
-std::string compensated_qif(const PointTable& t, const compensation::CompensationResult& r, const std::string& source) {
+std::string contact_points_qif(const PointTable& t, const std::vector<QifContactPoint>& points, const std::string& method,
+                               const std::string& source) {
   const Runs runs = runs_of(t);
   const std::vector<int> carried = attribute_columns(t, runs);
   const RowNumbers numbers(t);
   const double scale = 1.0 / t.unit.mm;  // mm → the input's unit
   std::vector<double> radii;
-  for (const compensation::CompensatedPoint& p : r.points) radii.push_back(scale * p.radius);
+  for (const QifContactPoint& p : points) radii.push_back(scale * p.radius);
   Document d;
   start_document(d, t, runs,
-                 "contact points compensated by probecomp's " + std::string(compensation::to_string(r.method)) +
-                     " method, machine frame, lengths in " + t.unit.name,
-                 {{"probecomp:method", compensation::to_string(r.method)}, {"probecomp:source", source}});
+                 "contact points compensated by probecomp's " + method + " method, machine frame, lengths in " + t.unit.name,
+                 {{"probecomp:method", method}, {"probecomp:source", source}});
   for (const Run& run : runs.runs) {
-    const auto point = [&](std::size_t k) -> const compensation::CompensatedPoint& { return r.points[k]; };
+    const auto point = [&](std::size_t k) -> const QifContactPoint& { return points[k]; };
     const std::vector<std::pair<std::string, std::string>> ours{
-        {"probecomp:status", joined(run.begin, run.end, [&](std::size_t k) { return std::string(compensation::to_string(point(k).status)); })},
+        {"probecomp:status", joined(run.begin, run.end, [&](std::size_t k) { return point(k).status; })},
         {"probecomp:u", joined(run.begin, run.end, [&](std::size_t k) {
-           return xs_double(point(k).computed() ? scale * point(k).uncertainty : kNaN);
+           return xs_double(point(k).computed ? scale * point(k).uncertainty : kNaN);
          })},
         {"probecomp:face", joined(run.begin, run.end, [&](std::size_t k) { return std::to_string(point(k).face); })}};
     pugi::xml_node s = append_set(d, t, run, carried, ours);
     s.append_child("Points").text() = triples(run.begin, run.end, [&](std::size_t k) {
-      return point(k).computed() ? Vector3(scale * point(k).contact) : numbers.centre(k);
+      return point(k).computed ? Vector3(scale * point(k).contact) : numbers.centre(k);
     }).c_str();
     s.append_child("Normals").text() = triples(run.begin, run.end, [&](std::size_t k) {
-      return point(k).computed() ? point(k).normal : Vector3(kNaN, kNaN, kNaN);
+      return point(k).computed ? point(k).normal : Vector3(kNaN, kNaN, kNaN);
     }).c_str();
-    const bool all = std::all_of(r.points.begin() + static_cast<std::ptrdiff_t>(run.begin),
-                                 r.points.begin() + static_cast<std::ptrdiff_t>(run.end),
-                                 [](const compensation::CompensatedPoint& p) { return p.computed(); });
+    const bool all = std::all_of(points.begin() + static_cast<std::ptrdiff_t>(run.begin),
+                                 points.begin() + static_cast<std::ptrdiff_t>(run.end),
+                                 [](const QifContactPoint& p) { return p.computed; });
     if (all) {
       s.append_child("Compensated").text() = "true";
     } else {
       s.append_child("Compensations").text() =
-          joined(run.begin, run.end, [&](std::size_t k) { return std::string(point(k).computed() ? "true" : "false"); }).c_str();
+          joined(run.begin, run.end, [&](std::size_t k) { return std::string(point(k).computed ? "true" : "false"); }).c_str();
     }
     append_radii(s, radii, run);
     s.append_child("Deviations").text() = joined(run.begin, run.end, [&](std::size_t k) {
-      return xs_double(point(k).computed() ? scale * point(k).deviation : kNaN);
+      return xs_double(point(k).computed ? scale * point(k).deviation : kNaN);
     }).c_str();
   }
   return finish(d);

@@ -19,12 +19,12 @@
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/error.hpp"
 #include "probecomp/geometry/stopwatch.hpp"
-#include "probecomp/io/dmis.hpp"
 #include "probecomp/io/output_files.hpp"
+#include "probecomp/io/point_files.hpp"
 #include "probecomp/io/point_table.hpp"
-#include "probecomp/io/qif.hpp"
-#include "probecomp/io/report.hpp"
-#include "probecomp/io/results.hpp"
+#include "probecomp/results/report.hpp"
+#include "probecomp/results/files.hpp"
+#include "probecomp/results/statistics.hpp"
 #include "probecomp/io/text.hpp"
 #include "probecomp/nurbs/surface.hpp"
 #include "probecomp/version.hpp"
@@ -32,6 +32,23 @@
 namespace py = pybind11;
 
 namespace probecomp::python {
+
+// The words a Hint (probecomp/error.hpp) takes in Python: the keyword arguments of probecomp.compensate and
+// probecomp.read_points.
+std::string hint_words(Hint hint) {
+  switch (hint) {
+    case Hint::InitialTransform:
+      return ". Give a rough alignment with initial_transform=T (a (4, 4) array, CAD -> machine), or check the CAD "
+             "file, the frame and the probe radius";
+    case Hint::InitialTransformOrAcceptDoubtful:
+      return ". Give a rough alignment with initial_transform=T (a (4, 4) array, CAD -> machine); if the part really "
+             "deviates from its model by about the probe radius, accept_doubtful_registration=True runs on with a "
+             "warning";
+    case Hint::DeclaredUnit: return " as units= says";
+    case Hint::None: break;
+  }
+  return "";
+}
 
 namespace {
 
@@ -78,7 +95,7 @@ py::array_t<double> matrix(const Eigen::Matrix4d& M) {
 // A run's result with what its statistics need (the inputs as the command line states them).
 struct Run {
   compensation::CompensationResult result;
-  io::RunInputs inputs;
+  results::RunInputs inputs;
   double seconds = 0.0;
   std::vector<nurbs::Surface> part_surfaces;  // fit(): the fitted contact surfaces, one per fitted face
   std::vector<int> part_faces;                // their faces' indices
@@ -113,7 +130,7 @@ Run run_compensate(const cad::Model& model, const Array& centres, const Array& r
                        " centres");
     }
     o.probe_radii.assign(radii.data(), radii.data() + radii.size());
-    run.inputs.tip_radii = io::distinct_radii(o.probe_radii);
+    run.inputs.tip_radii = results::distinct_radii(o.probe_radii);
     o.probe_radius = run.inputs.tip_radii.empty() ? 0.0 : run.inputs.tip_radii.front();
   } else {
     if (!probe_radius) throw std::invalid_argument("probe_radius is needed");
@@ -189,6 +206,21 @@ PYBIND11_MODULE(_probecomp, m) {
   py::register_exception<CadError>(m, "CadError", error.ptr());
   py::register_exception<RegistrationError>(m, "RegistrationError", error.ptr());
   py::register_exception<FitError>(m, "FitError", error.ptr());
+  // An error's hint in this package's words (its keyword arguments), after the message; registered last, so tried first.
+  py::register_exception_translator([](std::exception_ptr thrown) {
+    try {
+      if (thrown) std::rethrow_exception(thrown);
+    } catch (const Error& e) {
+      if (e.hint() == Hint::None) throw;
+      const std::string what = e.what() + hint_words(e.hint());
+      const char* kind = dynamic_cast<const RegistrationError*>(&e) ? "RegistrationError"
+                         : dynamic_cast<const InputError*>(&e)      ? "InputError"
+                         : dynamic_cast<const CadError*>(&e)        ? "CadError"
+                         : dynamic_cast<const FitError*>(&e)        ? "FitError"
+                                                                    : "Error";
+      PyErr_SetString(py::module_::import("probecomp._probecomp").attr(kind).ptr(), what.c_str());
+    }
+  });
 
   py::class_<cad::Model, std::shared_ptr<cad::Model>>(m, "CadModel",
                                                      "A part's faces from a STEP or IGES file, as NURBS with their trims and "
@@ -293,17 +325,17 @@ PYBIND11_MODULE(_probecomp, m) {
       .def_property_readonly("surface_faces", [](const Run& r) { return r.part_faces; })
       .def("statistics_json",
            [](const Run& r, std::optional<std::pair<double, double>> tolerance) {
-             std::optional<io::Tolerance> t;
-             if (tolerance) t = io::Tolerance{tolerance->first, tolerance->second};
-             return io::statistics_json(r.result, r.inputs, {.total = r.seconds}, t);
+             std::optional<results::Tolerance> t;
+             if (tolerance) t = results::Tolerance{tolerance->first, tolerance->second};
+             return results::statistics_json(r.result, r.inputs, {.total = r.seconds}, t);
            },
            py::arg("tolerance") = std::nullopt)
       .def("report_html",
            [](const Run& r, const cad::Model& model, std::optional<std::pair<double, double>> tolerance) {
-             io::ReportContext c{.inputs = r.inputs, .tolerance = std::nullopt, .timings = {.total = r.seconds}};
-             if (tolerance) c.tolerance = io::Tolerance{tolerance->first, tolerance->second};
-             c.nominal = io::registered_outline(model, r.result.registration.transform);
-             return io::html_report(r.result, c);
+             results::ReportContext c{.inputs = r.inputs, .tolerance = std::nullopt, .timings = {.total = r.seconds}};
+             if (tolerance) c.tolerance = results::Tolerance{tolerance->first, tolerance->second};
+             c.nominal = results::registered_outline(model, r.result.registration.transform);
+             return results::html_report(r.result, c);
            },
            py::arg("model"), py::arg("tolerance") = std::nullopt);
 
@@ -312,7 +344,12 @@ PYBIND11_MODULE(_probecomp, m) {
         py::arg("fit"), py::arg("points_name"), py::arg("unit"));
 
   m.def("parse_tolerance", [](const std::string& text) {
-    const io::Tolerance t = io::parse_tolerance(text);
+    results::Tolerance t;
+    try {
+      t = results::parse_tolerance(text);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("tolerance: ") + e.what());
+    }
     return std::pair{t.lower, t.upper};
   });
 
@@ -391,7 +428,7 @@ PYBIND11_MODULE(_probecomp, m) {
       }
     }
     py::gil_scoped_release unlocked;
-    const std::string text = io::is_qif(path) ? io::points_qif(t) : io::is_dmis(path) ? io::points_dmis(t, path) : io::points_csv(t);
+    const std::string text = io::points_text(t, io::point_format(path), path);
     io::OutputFiles files;
     files.add(path, text);
     files.commit();

@@ -17,6 +17,7 @@
 #include "probecomp/simulation/freeform_case.hpp"
 #include "probecomp/simulation/measure.hpp"
 #include "probecomp/studies/freeform_study.hpp"
+#include "support/light.hpp"
 
 namespace probecomp {
 namespace {
@@ -461,7 +462,7 @@ TEST(Pipeline, AFewGrossOutliersAreLeftOutWithoutRegisteringAgain) {
   const PaperPanel panel(120, 60);
   const compensation::CompensateOptions& o = panel.options;
   const simulation::FreeformCase& c = panel.c;
-  for (const std::uint64_t seed : {1u, 2u}) {
+  for (const std::uint64_t seed : test::cases<std::uint64_t>({1u, 2u})) {
     SCOPED_TRACE(seed);
     const std::vector<Point3> clean = panel.centres(c.noise_sigma, seed);
     ASSERT_FALSE(HasFailure());
@@ -501,7 +502,7 @@ TEST(Pipeline, GrossOutliersMoveNoOtherPoint) {
   const PaperPanel panel(60, 30);
   const compensation::CompensateOptions& o = panel.options;
   const simulation::FreeformCase& c = panel.c;
-  for (const std::uint64_t seed : {1u, 2u, 3u}) {
+  for (const std::uint64_t seed : test::cases<std::uint64_t>({1u, 2u, 3u})) {
     SCOPED_TRACE(seed);
     const std::vector<Point3> clean = panel.centres(c.noise_sigma, seed);
     ASSERT_FALSE(HasFailure());
@@ -575,7 +576,7 @@ AgainstTruth against_truth(const compensation::CompensationResult& r, const cad:
 TEST(Pipeline, GrossOutliersAtLowAndHighNoise) {
   const PaperPanel panel(120, 60);
   for (const double sigma : {0.0005, 0.0045}) {
-    for (const std::uint64_t seed : {1u, 2u, 3u}) {
+    for (const std::uint64_t seed : test::cases<std::uint64_t>({1u, 2u, 3u})) {
       SCOPED_TRACE(testing::Message() << "sigma " << sigma << " seed " << seed);
       std::vector<Point3> points = panel.centres(sigma, seed);
       const std::vector<char> moved = move_one_percent(points, panel.plan, seed);
@@ -600,7 +601,7 @@ TEST(Pipeline, GrossOutliersAtLowAndHighNoise) {
 // u before, at the flagged points, whose u was the fit's alone: 1.4–1.7 µm).
 TEST(Pipeline, UnfollowedShapeAtLowNoiseIsNotPeeledOff) {
   const PaperPanel panel(60, 30);
-  for (const std::uint64_t seed : {1u, 2u, 3u}) {
+  for (const std::uint64_t seed : test::cases<std::uint64_t>({1u, 2u, 3u})) {
     SCOPED_TRACE(seed);
     const std::vector<Point3> points = panel.centres(0.0005, seed);
     const AgainstTruth t = against_truth(compensation::compensate(panel.c.nominal, points, std::nullopt, panel.options),
@@ -621,9 +622,9 @@ TEST(Pipeline, UnfollowedShapeAtLowNoiseIsNotPeeledOff) {
 // holds its residual (a prediction error). Measured: 1.93, 2.34, 2.51 u (60 × 30) and 1.28, 1.39, 0.99 u (120 × 60);
 // 17.2 u, and 814 and 4 358 u, before.
 TEST(Pipeline, NoiseFreeDataWithGrossOutliersStateEveryErrorWithinItsU) {
-  for (const int nu : {60, 120}) {
+  for (const int nu : test::cases({120, 60})) {
     const PaperPanel panel(nu, nu / 2);
-    for (const std::uint64_t seed : {1u, 2u, 3u}) {
+    for (const std::uint64_t seed : test::cases<std::uint64_t>({1u, 2u, 3u})) {
       SCOPED_TRACE(testing::Message() << nu << " x " << nu / 2 << " seed " << seed);
       std::vector<Point3> points = panel.centres(0.0, seed);
       const std::vector<char> moved = move_one_percent(points, panel.plan, seed);

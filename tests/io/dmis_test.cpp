@@ -5,7 +5,9 @@
 #include <cmath>
 #include <fstream>
 
-#include "probecomp/io/results.hpp"
+#include "probecomp/io/point_files.hpp"
+#include "probecomp/results/files.hpp"
+#include "probecomp/results/statistics.hpp"
 
 namespace probecomp {
 namespace {
@@ -228,7 +230,7 @@ TEST(Dmis, CompensatedOutputStatesTheTipsOfAnInputThatGaveThem) {
     p.radius = 1.0;
     r.points.push_back(p);
   }
-  const std::string text = io::compensated_dmis(in, r, "c1.dmo");
+  const std::string text = results::compensated_dmis(in, r, "c1.dmo");
   EXPECT_NE(text.find("UNITS/MM,ANGDEC\nS(A)=SNSDEF/PROBE,INDEX,POL,0,90,0,0,1,150,2\nSNSLCT/S(A)\nFA(P1)="), std::string::npos)
       << text;
   EXPECT_EQ(text.find("SNSLCT", text.find("FA(P1)")), std::string::npos) << text;  // selected once

@@ -17,6 +17,7 @@
 #include "probecomp/error.hpp"
 #include "probecomp/io/dmis.hpp"
 #include "probecomp/io/text.hpp"
+#include "probecomp/results/files.hpp"
 
 namespace probecomp::io {
 namespace {
@@ -312,7 +313,7 @@ compensation::CompensationResult three_points() {
 
 TEST(Qif, CompensatedDocumentHoldsEverySetPointAndStatus) {
   const PointTable input = read_point_csv(write("in.csv", "x,y,z,i,j,k,set,id\n0,0,1,0,0,1,7,a\n9,9,9,0,0,1,7,b\n2,0,1,0,0,1,8,c\n"));
-  const std::string doc = compensated_qif(input, three_points(), "in.csv");
+  const std::string doc = results::compensated_qif(input, three_points(), "in.csv");
   pugi::xml_document x;
   ASSERT_TRUE(x.load_string(doc.c_str()));
   const pugi::xml_node sets = x.child("QIFDocument").child("Results").child("MeasurementResultsSet")
@@ -337,7 +338,7 @@ TEST(Qif, CompensatedDocumentHoldsEverySetPointAndStatus) {
   EXPECT_EQ(std::string(second.child("ProbeRadius").text().get()), "0.25");
   EXPECT_TRUE(doc.find("probecomp:source\" value=\"in.csv\"") != std::string::npos);
   // The same input gives the same document, byte for byte (its QPId too).
-  EXPECT_EQ(doc, compensated_qif(input, three_points(), "in.csv"));
+  EXPECT_EQ(doc, results::compensated_qif(input, three_points(), "in.csv"));
   // A compensated document is not read as probe centres.
   EXPECT_NE(error_of([&] { (void)read_point_qif(write("out.qif", doc)); }).find("point 1 is compensated already"),
             std::string::npos);
@@ -358,7 +359,7 @@ TEST(Qif, EveryDocumentWrittenValidatesAgainstTheQif3Schemas) {
   const std::vector<std::pair<std::string, std::string>> documents{
       {"v_sample.qif", points_qif(read_point_qif(kSample))}, {"v_csv.qif", points_qif(csv)},
       {"v_inch.qif", points_qif(inch)},                      {"v_dmis.qif", points_qif(dmis)},
-      {"v_compensated.qif", compensated_qif(three, three_points(), "v3.csv")}};
+      {"v_compensated.qif", results::compensated_qif(three, three_points(), "v3.csv")}};
   for (const auto& [name, text] : documents) {
     const fs::path p = write(name, text);
     const fs::path log = write(name + ".log", "");

@@ -1,13 +1,13 @@
 #pragma once
 // The whole method (DESIGN.md §2) on a CAD model and raw probe-centre points, as named steps:
-//   load        cad::Model::load (STEP/IGES) and io::read_points (CSV/DMIS): not here, files are cad/'s and io/'s
+//   load        cad::Model::load (STEP/IGES) and io::read_points (CSV, DMIS, QIF): not here, files are cad/'s and io/'s
 //   prepare     each face's material side, every face offset by r towards the probe, the offset model indexed
 //   register    the raw centres registered to the offset model (robust ICP)
 //   fit         points assigned to faces by their correspondences; each face's centre surface fitted through its
 //               points (adaptive, outliers flagged and left out)
 //   compensate  each point smoothed onto its fit and moved by r along the fitted normal into the material; its
 //               deviation from the registered nominal
-//   write       io/results.hpp (CSV, DMIS, JSON statistics)
+//   write       results/files.hpp (CSV, DMIS, QIF), results/statistics.hpp (JSON statistics)
 // compensate() composes them; the conventional method (c − r·(i,j,k), registered to the nominal) has one step.
 // Every input point comes back, in order, with a status saying whether it can be trusted.
 

@@ -29,11 +29,7 @@ namespace probecomp::io {
 [[nodiscard]] PointTable read_point_dmis(const std::filesystem::path& path,
                                          std::optional<LengthUnit> declared = std::nullopt);
 
-// By extension: .dmo/.dmi/.dms (DMIS), .qif (io/qif.hpp) or anything else as CSV.
-// `progress` is heard while a CSV is read (the usual form of a long scan).
-[[nodiscard]] PointTable read_points(const std::filesystem::path& path,
-                                     std::optional<LengthUnit> declared = std::nullopt,
-                                     const FileProgress& progress = {}, NumberText number_text = NumberText::Keep);
+// .dmo, .dmi or .dms, in any case.
 [[nodiscard]] bool is_dmis(const std::filesystem::path& path);
 
 // One `FA(label)=FEAT/POINT,CART,x,y,z,i,j,k` statement: x in mm written in `unit` (9 decimals), the unit normal

@@ -10,8 +10,8 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
-#include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/io/point_table.hpp"
 
 namespace probecomp::io {
@@ -40,15 +40,23 @@ namespace probecomp::io {
 // the rows' text, written as the shortest text that reads back as the same double.
 [[nodiscard]] std::string points_qif(const PointTable& table);
 
-// The compensation's results as a QIF 3.0 document: one MeasuredPointSet per set of the input (as points_qif
-// groups them), with the same id, count and order. `Points`: the compensated contact points (a point not
-// computed keeps its raw centre); `Normals`: the normals used (NaN where none was); `Compensated` true, or
-// `Compensations` when some points were not computed (false for those); the tip radii; `Deviations` (NaN where
-// not computed). In the set's Attributes: `probecomp:status` (each point's status: ok, outlier, edge, ...),
-// `probecomp:u` (its standard uncertainty along the normal, k = 1, NaN where not computed) and `probecomp:face`
-// (the CAD face, -1 for none), space-separated, and the input's carried columns. Lengths in the input's unit.
-// The document's own Attributes name the method and `source` (the input file).
-[[nodiscard]] std::string compensated_qif(const PointTable& input, const compensation::CompensationResult& result,
-                                          const std::string& source);
+// One contact point of a compensated document: lengths in mm, machine frame.
+struct QifContactPoint {
+  bool computed = false;  // else the document keeps the raw centre, NaN normal, deviation and u, and says so
+  Point3 contact = Point3::Zero();
+  Vector3 normal = Vector3::Zero();
+  double deviation = 0.0, uncertainty = 0.0, radius = 0.0;
+  int face = -1;
+  std::string status;  // ok, outlier, edge, ...
+};
+// Contact points as a QIF 3.0 document: one MeasuredPointSet per set of the input (as points_qif groups them), with
+// the same id, count and order. `Points`: the contact points (a point not computed keeps its raw centre);
+// `Normals`: the normals used (NaN where none was); `Compensated` true, or `Compensations` when some points were not
+// computed (false for those); the tip radii; `Deviations` (NaN where not computed). In the set's Attributes:
+// `probecomp:status`, `probecomp:u` (the standard uncertainty along the normal, k = 1, NaN where not computed) and
+// `probecomp:face` (the CAD face, -1 for none), space-separated, and the input's carried columns. Lengths in the
+// input's unit. The document's own Attributes name the `method` and `source` (the input file).
+[[nodiscard]] std::string contact_points_qif(const PointTable& input, const std::vector<QifContactPoint>& points,
+                                             const std::string& method, const std::string& source);
 
 }  // namespace probecomp::io

@@ -2,7 +2,7 @@
 // What an inspector reads of a run (issue 22): one self-contained HTML page (no file, script, style or font from
 // outside it: it opens offline) with a 3-D colour map of the deviations, histograms, a table per face against an
 // optional tolerance band, the registration, the inputs and the timings. Its tables carry the JSON's figures
-// (io/results.hpp: summarise_deviations, statistics_json).
+// (results/statistics.hpp: summarise_deviations, statistics_json).
 
 #include <cstddef>
 #include <optional>
@@ -13,9 +13,9 @@
 #include "probecomp/cad/outline.hpp"
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/geometry/rigid.hpp"
-#include "probecomp/io/results.hpp"
+#include "probecomp/results/statistics.hpp"
 
-namespace probecomp::io {
+namespace probecomp::results {
 
 // The report's inputs beyond the result.
 struct ReportContext {
@@ -46,4 +46,4 @@ struct ReportContext {
 // fitted or why not); the registration (status, RMS, transform, free motions); the warnings; the timings.
 [[nodiscard]] std::string html_report(const compensation::CompensationResult& result, const ReportContext& context);
 
-}  // namespace probecomp::io
+}  // namespace probecomp::results

@@ -3,7 +3,7 @@
 // decimation (every k-th row, the worst always); the nominal outline moved by the registration. Rendering in a browser
 // is tests/cli/report.sh's.
 
-#include "probecomp/io/report.hpp"
+#include "probecomp/results/report.hpp"
 
 #include <gtest/gtest.h>
 
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace probecomp::io {
+namespace probecomp::results {
 namespace {
 
 using compensation::CompensatedPoint;
@@ -166,4 +166,4 @@ TEST(RegisteredOutline, IsTheModelsOutlineMovedByTheRegistrationWithinItsBudget)
 }
 
 }  // namespace
-}  // namespace probecomp::io
+}  // namespace probecomp::results

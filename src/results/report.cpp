@@ -1,4 +1,4 @@
-#include "probecomp/io/report.hpp"
+#include "probecomp/results/report.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,9 +9,13 @@
 #include "probecomp/io/charts.hpp"  // xml_escape
 #include "probecomp/io/format.hpp"
 #include "probecomp/version.hpp"
-#include "report_view.hpp"  // generated from src/io/report_view.js
+#include "report_view.hpp"  // generated from src/results/report_view.js
 
-namespace probecomp::io {
+namespace probecomp::results {
+
+using io::fmt;
+using io::mm;
+using io::xml_escape;
 
 namespace {
 
@@ -387,4 +391,4 @@ std::string html_report(const compensation::CompensationResult& r, const ReportC
   return h.str();
 }
 
-}  // namespace probecomp::io
+}  // namespace probecomp::results

@@ -1,7 +1,8 @@
 // The --json statistics: values that are not finite (a face whose points have no finite uncertainty, a registration
 // that failed numerically) must not make the file unreadable, as printf's "nan" and "inf" would.
 
-#include "probecomp/io/results.hpp"
+#include "probecomp/results/files.hpp"
+#include "probecomp/results/statistics.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,7 +14,9 @@
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/io/format.hpp"
 
-namespace probecomp::io {
+namespace probecomp::results {
+
+using io::json_number;
 namespace {
 
 TEST(StatisticsJson, ValuesThatAreNotFiniteAreWrittenNull) {
@@ -49,4 +52,4 @@ TEST(StatisticsJson, FiniteValuesAreWrittenAsBefore) {
 }
 
 }  // namespace
-}  // namespace probecomp::io
+}  // namespace probecomp::results

@@ -1,9 +1,8 @@
 #pragma once
-// The compensation's results as files (DESIGN.md §5): every input row back, in order, as CSV or DMIS; the run's
-// statistics as JSON; a summary page in HTML. Lengths with 9 decimals (nm), unit vectors with 12.
+// The run's figures: the inputs and timings, the trusted deviations summarised per face and overall against an
+// optional tolerance, and all of it as the JSON statistics (DESIGN.md §5; read by the report and the Python package).
 
 #include <optional>
-#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -11,24 +10,7 @@
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/io/point_table.hpp"
 
-namespace probecomp::io {
-
-// x,y,z,nx,ny,nz,deviation,u,face,status, r (each row's tip radius) when the input gave radii, and the input's other
-// columns (renamed input_NAME where they clash with ours), lengths in the input's unit. A point that was not computed keeps its row: empty fields and the reason in
-// `status`.
-[[nodiscard]] std::string compensated_csv(const PointTable& input, const compensation::CompensationResult& result);
-// The same, written to `out` block by block (the whole text is never held: a million rows are 115 MB); `progress`
-// hears the share of rows written after each block.
-void write_compensated_csv(std::ostream& out, const PointTable& input, const compensation::CompensationResult& result,
-                           const FileProgress& progress = {});
-
-// One DMIS FA(label) point per computed point (labels from the input's label or id column, else P1, P2, ...),
-// with its deviation, face and status in a comment; a comment line for each point not computed. Lengths in the
-// input's unit, stated by a UNITS statement first. When the input gave the points their own radii, the tips follow
-// it: an SNSDEF per tip and an SNSLCT where the tip changes (io::DmisTips), with the radius each point was
-// compensated with.
-[[nodiscard]] std::string compensated_dmis(const PointTable& input, const compensation::CompensationResult& result,
-                                           const std::string& source);
+namespace probecomp::results {
 
 // Seconds the caller spent outside compensate(): reading the files, writing the results, the whole run.
 struct FileTimings {
@@ -39,7 +21,7 @@ struct FileTimings {
 // (mm; none when each point has its own) and the distinct tip radii of the points (mm, ascending).
 struct RunInputs {
   std::string cad, points;
-  LengthUnit points_unit = kMillimetre;
+  io::LengthUnit points_unit = io::kMillimetre;
   std::optional<double> probe_radius;
   std::vector<double> tip_radii{};
 };
@@ -85,4 +67,4 @@ struct DeviationSummaries {
                                           const FileTimings& timings,
                                           const std::optional<Tolerance>& tolerance = std::nullopt);
 
-}  // namespace probecomp::io
+}  // namespace probecomp::results
