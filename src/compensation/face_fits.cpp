@@ -1,0 +1,335 @@
+// second_contacts and fit_faces: each face's points, and its centre surface fitted through them.
+
+#include "probecomp/compensation/pipeline.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "probecomp/compensation/normal_support.hpp"
+#include "probecomp/compensation/outliers.hpp"
+#include "probecomp/geometry/neighbours.hpp"
+#include "probecomp/geometry/parallel.hpp"
+#include "probecomp/geometry/stopwatch.hpp"
+#include "probecomp/nurbs/degree_elevation.hpp"
+
+#include "contact_points.hpp"
+#include "input_checks.hpp"
+#include "warnings.hpp"
+
+namespace probecomp::compensation {
+
+namespace {
+
+using detail::as_smallest_tip;
+using detail::kNotFitted;
+using detail::kOffsetAlongNominal;
+using detail::kSamePosition;
+using detail::mm;
+
+// The fit starts from the registered offset face. A degree-1 direction (a plane, a cylinder's rulings) could
+// follow a deformation only by creases at the knots refinement inserts, so it is raised to degree 3 first
+// (same shape and parameters, so the registration's (u, v) still hold).
+nurbs::Surface fit_start(const nurbs::Surface& offset_face, const geometry::RigidTransform& T) {
+  nurbs::Surface s = nurbs::transformed(offset_face, T);
+  if (s.p() < 2) s = nurbs::elevate_degree_u(s, 3 - s.p());
+  if (s.q() < 2) s = nurbs::elevate_degree_v(s, 3 - s.q());
+  return s;
+}
+
+// Fits made at most per face while peeling outliers off (each refit follows a change in the points left out).
+constexpr int kMaxOutlierFits = 4;
+// Whether leaving points out of a fit (or taking them back in) is worth a refit: a point of residual e among n
+// points on m control points moves its control points by about e·m/n, so points whose largest residual moves
+// the fit by less than this fraction of the noise estimate change nothing measurable (a few 5σ points among a
+// million on a few thousand control points move it by a hundredth of σ).
+constexpr double kNegligibleShift = 0.1;
+
+bool moves_fit(double largest_residual, std::size_t points, const fitting::AdaptiveFitResult& fit) {
+  const double per_control_point = static_cast<double>(points) / std::max(fit.control_points, 1);
+  return largest_residual / per_control_point > kNegligibleShift * fit.noise_sigma;
+}
+
+// The fit's per-point results for every member of a face, from those of the member's position among the points
+// fitted (`position`: member → fitted point).
+void per_member(fitting::AdaptiveFitResult& fit, std::span<const std::uint32_t> position) {
+  auto expand = [&](auto& values) {
+    std::remove_reference_t<decltype(values)> out(position.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, position.size(), 1 << 14), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) out[i] = values[position[i]];
+    });
+    values = std::move(out);
+  };
+  expand(fit.params);
+  expand(fit.residuals);
+  expand(fit.variance_factor);
+  expand(fit.misfit);
+}
+
+// Why a face's fit stopped, in one line.
+std::string fit_stop_reason(const fitting::AdaptiveFitResult& fit, const fitting::AdaptiveFitOptions& options) {
+  using S = fitting::AdaptiveFitResult::Status;
+  switch (fit.status) {
+    case S::OK: return "every span's residuals are consistent with the noise estimate";
+    case S::NoiseNotReached:
+      return std::to_string(fit.spans_above_noise) + " span(s) still above the noise: " +
+             (fit.rounds >= options.max_rounds ? "the refinement rounds ran out"
+                                               : "the points support no more control points");
+    case S::NotDone: return "the fit could not be set up (too few usable points for its control points)";
+    case S::NumericalError: return "the fit's normal equations could not be solved";
+  }
+  return "?";
+}
+
+// A tip against a second face: its centre within this much (mm) as near that face's offset as its own, at most ...
+double contact_tolerance(double noise, double probe_radius) {
+  // Four noise σ: a tip on one face alone is rarely that close to a second by chance. At most 2 % of r: past
+  // that, the second face's foot near a smooth continuation of the first (a tangent fillet) would be within
+  // reach too, at an angle between their normals of up to √(2·tol/r) = 11°, under kMinContactAngle.
+  constexpr double kNoiseSigmas = 4.0;
+  constexpr double kMaxFractionOfRadius = 0.02;
+  constexpr double kFloor = 1e-3;
+  return std::min(std::max(kNoiseSigmas * noise, kFloor), kMaxFractionOfRadius * probe_radius);
+}
+// ... and with normals this far apart (degrees): two faces meeting at a concave edge, not one continuing smoothly.
+constexpr double kMinContactAngle = 15.0;
+
+}  // namespace
+
+std::vector<int> second_contacts(const PreparedModel& prepared, std::span<const Point3> raw,
+                                 const registration::RegistrationResult& registration) {
+  const double min_cos = std::cos(kMinContactAngle * std::numbers::pi / 180.0);
+  const geometry::RigidTransform to_cad = registration.transform.inverse();
+  return geometry::parallel_map<int>(raw.size(), 64, [&](std::size_t k) {
+    const registration::PointMatch& m = registration.matches[k];
+    if (!m.ok() || m.on_edge || !raw[k].allFinite()) return -1;
+    // On the nominal model: the tip's centre is r + its deviation from the face it touches. The other face's
+    // contact direction is from its foot to the centre (its normal inside the face; across a convex edge shared
+    // with the first face, nearly the first face's normal, which is one contact, not two).
+    const Point3 c = to_cad * raw[k];
+    const double r = prepared.radii[k];
+    const double tol = contact_tolerance(registration.scale, r);
+    const cad::ModelPoint other = prepared.nominal_locator->closest_point_on_other_faces(c, m.face, std::abs(r + m.distance) + tol);
+    if (other.face < 0 || !other.ok()) return -1;
+    const Vector3 n = prepared.nominal_locator->outward_normal(m.face, m.u, m.v);
+    return n.dot((c - other.point).normalized()) < min_cos ? other.face : -1;
+  });
+}
+
+FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
+                    const registration::RegistrationResult& registration, const FitOptions& options,
+                    const StepProgress& progress) {
+  const geometry::Stopwatch clock;
+  const cad::Model& work = *prepared.nominal;
+  const geometry::RigidTransform& T = registration.transform;
+  FitResult out;
+  out.second_contact = second_contacts(prepared, raw, registration);
+  // Points by face (their correspondences); edge and double-contact points count in their face's report but are
+  // never fitted.
+  std::map<int, FaceFit> by_face;
+  auto member = [&](std::size_t k) {
+    const registration::PointMatch& m = registration.matches[k];
+    return m.ok() && raw[k].allFinite() && !m.on_edge && out.second_contact[k] < 0;
+  };
+  // Counted first, so that each face's member list is allocated once, at its size; by face position in arrays
+  // (a map's lookup for each of a million points took 30 ms).
+  const std::size_t n_faces = work.faces.size();
+  std::vector<std::size_t> member_count(n_faces, 0), point_count(n_faces, 0);
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    const registration::PointMatch& m = registration.matches[k];
+    if (!m.ok() || !raw[k].allFinite()) continue;
+    const std::size_t f = static_cast<std::size_t>(m.face);
+    ++point_count[f];
+    if (member(k)) ++member_count[f];
+  }
+  std::vector<std::vector<std::uint32_t>*> members_of(n_faces, nullptr);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    if (point_count[f] == 0) continue;
+    FaceFit& ff = by_face[static_cast<int>(f)];
+    ff.report.points = static_cast<int>(point_count[f]);
+    ff.members.reserve(member_count[f]);
+    members_of[f] = &ff.members;
+  }
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    if (member(k)) members_of[static_cast<std::size_t>(registration.matches[k].face)]->push_back(static_cast<std::uint32_t>(k));
+  }
+
+  std::size_t done = 0;
+  for (auto& [f, ff] : by_face) {
+    ff.face = f;
+    const cad::Face& face = work.faces[static_cast<std::size_t>(f)];
+    FaceReport& rep = ff.report;
+    rep.face = face.index;
+    rep.outward = face.outward;
+    rep.material = prepared.material[static_cast<std::size_t>(f)].source;
+    // A face that had no points nearest to it before registration kept the file's orientation.
+    if (rep.material == cad::MaterialSource::NoPoints) rep.material = cad::MaterialSource::File;
+    const std::vector<std::uint32_t>& members = ff.members;
+    const nurbs::Surface start = fit_start(prepared.offset->model.faces[static_cast<std::size_t>(f)].surface, T);
+    // The members' centres as the smallest tip's would be: a larger tip's moved in by the difference along the
+    // registered nominal normal, and once there is a fit, along the fit's own (see the refits below).
+    bool mixed = false;
+    for (std::size_t k : members) mixed = mixed || prepared.radii[k] != prepared.radii.smallest();
+    std::vector<Point3> member_points(members.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, members.size(), 1 << 14), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) member_points[i] = as_smallest_tip(prepared, registration, raw, members[i]);
+    });
+    // A point at an earlier point's position (a reading recorded twice: a scanner's repeated sample, a row copied)
+    // is one observation: fitted once. Counted twice it would be its own nearest neighbour, so the noise estimate
+    // (differences of neighbouring residuals) would read low, the cross-validation would take the copies as
+    // confirming each other, and the fit would chase the noise (10 % repeated on the free-form case: 1 927
+    // control points instead of 783).
+    // With each point's nearest other (the fit's noise estimate takes differences of neighbouring residuals), from
+    // the same k-d tree.
+    geometry::NearestAndFirst around = geometry::nearest_other_and_first(member_points, kSamePosition);
+    const std::vector<std::uint32_t>& first = around.first;
+    std::vector<std::uint32_t> position(members.size());  // member → its position among the fitted points
+    std::vector<Point3> pts;
+    std::vector<std::uint32_t> fitted_point;  // fitted point → its input index
+    std::vector<fitting::SurfaceParameter> params;
+    // Each member's position among the fitted points (a repeat takes its first's). The members' centres are
+    // compacted in place into the fitted points (a position is never past its member: forward, nothing is
+    // overwritten before it is read), not copied: a second array of them would be the fit's peak (a million points:
+    // 24 MB, 24 bytes a point). The other arrays are filled at those positions in parallel.
+    std::size_t kept = 0;
+    pts = std::move(member_points);
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      if (first[i] != i) {
+        position[i] = position[first[i]];
+        ++rep.repeated;
+      } else {
+        position[i] = static_cast<std::uint32_t>(kept);
+        pts[kept++] = pts[i];
+      }
+    }
+    pts.resize(kept);
+    fitted_point.resize(kept);
+    params.resize(kept);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, members.size(), 1 << 14), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        if (first[i] != i) continue;
+        fitted_point[position[i]] = members[i];
+        params[position[i]] = {registration.matches[members[i]].u, registration.matches[members[i]].v};
+      }
+    });
+    const double needed = options.min_points_per_control_point * start.num_u() * start.num_v();
+    std::optional<fitting::AdaptiveFitResult>& fit = ff.fit;
+    std::vector<double> weights(pts.size(), 1.0);
+    // Each point's nearest other point, once per face for all its refits. Without repeats the fitted points are the
+    // members in order, whose nearest are at hand; with them, found again among the points kept.
+    const std::vector<std::uint32_t> nearest = rep.repeated == 0 ? std::move(around.nearest) : fitting::nearest_neighbours(pts);
+    around = {};
+    std::vector<char> in_fit;  // per fitted point: 1 where the last fit used it
+    // Points along a scanning probe's lines are predicted from their own line's neighbours whatever the fit does
+    // between the lines: their smoothing is chosen by leaving a knot span's points out at once (penalized.hpp).
+    // Elsewhere a point alone: a narrow, steep feature on a grid wants the fit that leave-one-out chooses (a dent of
+    // 19° flanks without noise: largest error 0.5 µm, against 4.5 µm left out by spans).
+    fitting::AdaptiveFitOptions surface = options.surface;
+    NormalCheck normal_check;
+    normal_check.along_lines = sampled_along_lines(pts);
+    // Nor is the energy made anisotropic there: a penalty that lets the fit bend freely across the lines lets it
+    // ring between them (shape suite, S13 without noise: std 4.6 -> 31 um with it).
+    if (*normal_check.along_lines) {
+      surface.fit.cross_validation = fitting::CrossValidation::LeaveSpanOut;
+      surface.fit.anisotropic = false;
+    }
+    auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at) {
+      in_fit.resize(pts.size());
+      for (std::size_t j = 0; j < pts.size(); ++j) in_fit[j] = weights[j] > 0.0;
+      fit = fitting::fit_surface(from, pts, at, weights, surface, nearest);
+      ++rep.fits;
+      rep.rounds += fit->rounds;
+    };
+    std::vector<char> outlier(pts.size(), 0);
+    if (static_cast<double>(pts.size()) >= needed) {
+      // Outliers are decided against the fit itself (compensation/outliers.hpp), left out, and the face refitted,
+      // until the set left out no longer changes: a point left out is taken back when the fit made without it
+      // predicts it within its bound (a point a fit bent by a gross error had pushed out), so that the set left
+      // out is the one the final fit agrees with.
+      bool moved_along_fit = false;
+      for (int attempt = 0; attempt < kMaxOutlierFits; ++attempt) {
+        // A refit starts over from the registered offset face: the first fit's refinement and adaptive penalty
+        // may have followed the gross errors it then found, and would keep their marks.
+        refit(start, params);
+        if (!fit->fitted()) break;
+        // The first fit, gross errors and all, against the face's noise; the refits without them against the
+        // spread around each point (compensation/outliers.hpp).
+        outlier = outliers_against_fit(*fit, weights, options.outliers, attempt == 0 ? Spread::Face : Spread::Local);
+        int changed = 0;
+        double largest = 0.0;
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+          if ((weights[i] > 0.0) == !outlier[i]) continue;
+          weights[i] = outlier[i] ? 0.0 : 1.0;
+          ++changed;
+          largest = std::max(largest, std::abs(fit->residuals[i]));
+        }
+        // Larger tips' centres were moved in along the nominal normal, which is off the actual one by the part's
+        // tilt θ there: an error of Δr·(1 − cos θ) (0.4 µm for Δr = 0.5 mm at 2°). Moved again along the fit's
+        // normal, once, and refitted.
+        const bool move_again = mixed && !moved_along_fit;
+        if (move_again) {
+          for (std::size_t j = 0; j < pts.size(); ++j) {
+            pts[j] = as_smallest_tip(prepared, registration, raw, fitted_point[j], &fit->surface, face.outward, fit->params[j]);
+          }
+          moved_along_fit = true;
+        }
+        if (!move_again && (changed == 0 || !moves_fit(largest, pts.size(), *fit))) break;
+      }
+    }
+    rep.fitted = fit && fit->fitted();
+    ff.trusted.resize(members.size());
+    // Trusted: what the last fit says (a point taken back or left out after it keeps the last fit's verdict).
+    ff.in_last_fit.resize(members.size());
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      ff.trusted[i] = !outlier[position[i]];
+      ff.in_last_fit[i] = in_fit.empty() || in_fit[position[i]];
+    }
+    if (rep.fitted) {
+      std::vector<double> last_weights(in_fit.begin(), in_fit.end());
+      const NormalDisagreement check = normal_disagreement(fit->surface, pts, fit->params, last_weights, normal_check);
+      ff.normal_checked_along_lines = check.along_lines;
+      if (!check.angle.empty()) {
+        ff.normal_angle.resize(members.size());
+        for (std::size_t i = 0; i < members.size(); ++i) ff.normal_angle[i] = check.angle[position[i]];
+      }
+      per_member(*fit, position);
+      rep.fit_status = fit->status;
+      rep.stop_reason = fit_stop_reason(*fit, options.surface);
+      rep.control_points = fit->control_points;
+      rep.rms = fit->rms;
+      rep.max_residual = fit->max_residual;
+      rep.noise_sigma = fit->noise_sigma;
+      rep.effective_dof = fit->effective_dof;
+      rep.log10_smoothing = fit->log10_smoothing;
+      rep.centre_surface = fit->surface;
+      ff.params = fit->params;
+    } else {
+      ff.params.resize(members.size());
+      for (std::size_t i = 0; i < members.size(); ++i) ff.params[i] = params[position[i]];
+      if (fit) {
+        rep.fit_status = fit->status;
+        rep.stop_reason = fit_stop_reason(*fit, options.surface) + kOffsetAlongNominal;
+        fit.reset();
+      } else {
+        rep.stop_reason = kNotFitted + std::to_string(pts.size()) + " points off the edges for " +
+                          std::to_string(start.num_u() * start.num_v()) + " control points (" + mm(needed) +
+                          " needed)" + kOffsetAlongNominal;
+      }
+    }
+    done += members.size();
+    if (progress) progress(static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(raw.size(), 1)));
+  }
+  out.faces.reserve(by_face.size());
+  for (auto& [f, ff] : by_face) out.faces.push_back(std::move(ff));
+  out.seconds = clock.seconds();
+  return out;
+}
+
+}  // namespace probecomp::compensation

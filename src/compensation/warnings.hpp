@@ -1,0 +1,37 @@
+#pragma once
+// The run's warnings (CompensationResult::warnings: what the user must know to read the result right, one line
+// each), and the lengths written in them and in error messages. Private to compensation/.
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/geometry/tip_radii.hpp"
+#include "probecomp/registration/icp.hpp"
+
+namespace probecomp::compensation::detail {
+
+// A length in mm as printed: three significant figures (%.3g); um: a length in mm in micrometres, with its unit.
+std::string mm(double v);
+std::string um(double v_mm);
+
+// The stop reason of a face that was not fitted (fit_faces) ends with kOffsetAlongNominal, and starts with
+// kNotFitted where it held too few points; the warning that lists such faces takes both off (unfitted_face_warnings).
+inline constexpr const char* kNotFitted = "not fitted: ";
+inline constexpr const char* kOffsetAlongNominal = "; its points are offset along the nominal normal";
+
+// What the user must know about a registration: its notes, an iteration limit reached, and the motions the data
+// do not fix (held at the start: the deviations are blind to them).
+void registration_warnings(const registration::RegistrationResult& r, std::vector<std::string>& warnings);
+
+// Faces that hold points but were not fitted, and why (the user can measure more there): one warning, the faces
+// with the most points first, at most kListedFaces of them by name.
+void unfitted_face_warnings(const std::vector<FaceReport>& faces, std::vector<std::string>& warnings);
+
+// Rows whose u is mostly the doubt about the fit's normal next to points left out or between scan lines
+// (compensation/normal_support.hpp): one warning per face, with the largest angle and what it makes.
+void normal_warnings(const FitResult& fits, const geometry::TipRadii& radii, std::span<const CompensatedPoint> points,
+                     std::vector<std::string>& warnings);
+
+}  // namespace probecomp::compensation::detail
