@@ -180,16 +180,13 @@ registration::RegistrationResult register_centres(const PreparedModel& prepared,
   // Nothing fits better: the figures may be the part's own form error, unless the data hardly touch the model or
   // most of them sit on its wrong side, where no deviation can be trusted.
   if (verdict.status == registration::Credibility::Status::LittleOverlap || verdict.inside_share > kMaxInsideShareKept) {
-    throw RegistrationError("the registration is not credible: " + verdict.reason + "; " + tried +
-                            " found none better. Give a rough alignment with --initial-transform T.txt (4 x 4, CAD -> "
-                            "machine), or check the CAD file, the frame and the probe radius");
+    throw RegistrationError("the registration is not credible: " + verdict.reason + "; " + tried + " found none better",
+                            Hint::InitialTransform);
   }
   const std::string doubtful = "the registration is doubtful: " + verdict.reason + "; " + tried +
                                (moved ? " improved it but found no credible one" : " found none better");
   if (!options.accept_doubtful) {
-    throw RegistrationError(doubtful + ". Give a rough alignment with --initial-transform T.txt (4 x 4, CAD -> machine); "
-                            "if the part really deviates from its model by about the probe radius, "
-                            "--accept-doubtful-registration runs on with a warning");
+    throw RegistrationError(doubtful, Hint::InitialTransformOrAcceptDoubtful);
   }
   best.notes.push_back(doubtful + ", and was accepted as asked: these may be the part's own deviations, or a wrong pose");
   return best;

@@ -57,7 +57,7 @@ void unfitted_face_warnings(const std::vector<FaceReport>& faces, std::vector<st
     if (const auto tail = why.find(kOffsetAlongNominal); tail != std::string::npos) why.erase(tail);
     w += (k == 0 ? ": " : "; ") + std::string("face ") + std::to_string(unfitted[k]->face) + ", " + why;
   }
-  if (unfitted.size() > kListedFaces) w += "; ... (every face in --json)";
+  if (unfitted.size() > kListedFaces) w += "; ... (every face in the JSON statistics)";
   warnings.push_back(w);
 }
 

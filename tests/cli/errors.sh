@@ -27,4 +27,11 @@ expect_error "spacing" "$W/plan.csv" "$P" plan "$CAD/asitus_wavy-cube.stp" --spa
 printf 'x,y,z,r\n1,2,3,1\n4,5,6,\n' >"$W/no_radius.csv"
 expect_error "no_radius.csv:3" "$W/out.csv" "$P" compensate --cad "$W/missing.stp" --points "$W/no_radius.csv" --output "$W/out.csv"
 expect_error "bad_number.csv:3" "$W/out.csv" "$P" compensate --cad "$W/missing.stp" --points "$W/bad_number.csv" --probe-radius 1 --output "$W/out.csv"
+# A unit the file states against the one --units declares: the library says the cause, the command adds the option.
+printf '# lengths in inch\nx,y,z\n1,2,3\n' >"$W/inch.csv"
+expect_error "inch.csv:1: the file says its lengths are in inch, not in mm as --units says$" "$W/out.csv" \
+  "$P" project --cad "$CAD/asitus_wavy-cube.stp" --points "$W/inch.csv" --units mm --output "$W/out.csv"
+# project reads every point format (io/point_files.hpp): a DMIS file's bad point names its line.
+printf 'FA(P1)=FEAT/POINT,CART,1,2\n' >"$W/short.dmo"
+expect_error "short.dmo:1" "$W/out.csv" "$P" project --cad "$CAD/asitus_wavy-cube.stp" --points "$W/short.dmo" --output "$W/out.csv"
 exit $fail

@@ -209,6 +209,12 @@ def test_errors_raise_the_librarys_kinds_with_the_clis_messages(demo, work):
     bad.write_text("x,y,z\n1,2,3\n4,five,6\n")
     with pytest.raises(probecomp.InputError, match="bad.csv:3"):
         probecomp.read_points(bad)
+    # What the caller can do is said in this package's words, never the command line's.
+    inch = work / "inch.csv"
+    inch.write_text("# lengths in inch\nx,y,z\n1,2,3\n")
+    with pytest.raises(probecomp.InputError, match="lengths are in inch, not in mm as units= says$") as e:
+        probecomp.read_points(inch, units="mm")
+    assert "--" not in str(e.value)
 
 
 def test_point_files_round_trip_through_every_format(demo, work):
