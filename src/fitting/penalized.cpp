@@ -11,6 +11,8 @@
 #include <limits>
 #include <numeric>
 
+#include "band.hpp"
+#include "penalty.hpp"
 #include "rational_basis.hpp"
 
 namespace probecomp::fitting {
@@ -18,202 +20,22 @@ namespace probecomp::fitting {
 namespace {
 
 using detail::RationalBasis;
-using detail::RationalBasisD2;
 using nurbs::Surface;
 
-// Control point (i, j) → unknown I, the shorter direction inner so that the band is narrow: every pair of control
-// points under one basis row (|Δi| ≤ p, |Δj| ≤ q) is then within b = p·nv + q (or q·nu + p) of each other.
-struct Ordering {
-  int nu = 0, nv = 0;
-  bool v_inner = true;
-  Ordering(int nu_, int nv_) : nu(nu_), nv(nv_), v_inner(nv_ <= nu_) {}
-  [[nodiscard]] int index(int i, int j) const { return v_inner ? i * nv + j : j * nu + i; }
-  [[nodiscard]] int bandwidth(int p, int q) const { return v_inner ? p * nv + q : q * nu + p; }
-};
-
-// A symmetric band matrix of order n and half-bandwidth b, its lower half by rows: (I, J), I − b ≤ J ≤ I, at
-// a[I·(b+1) + J − I + b]. Rows are contiguous, so the factorisation's inner products run over contiguous memory.
-struct Band {
-  int n = 0, b = 0;
-  std::vector<double> a;
-  Band() = default;
-  Band(int n_, int b_) : n(n_), b(b_), a(static_cast<std::size_t>(n_) * static_cast<std::size_t>(b_ + 1), 0.0) {}
-  [[nodiscard]] double& at(int I, int J) { return a[static_cast<std::size_t>(I) * (b + 1) + (J - I + b)]; }
-  [[nodiscard]] double at(int I, int J) const { return a[static_cast<std::size_t>(I) * (b + 1) + (J - I + b)]; }
-  // += scale · v vᵀ over the unknowns idx[0..m).
-  void add_outer(const int* idx, const double* v, int m, double scale) {
-    for (int x = 0; x < m; ++x) {
-      const double sx = scale * v[x];
-      if (sx == 0.0) continue;
-      for (int y = 0; y < m; ++y) {
-        if (idx[y] <= idx[x]) at(idx[x], idx[y]) += sx * v[y];
-      }
-    }
-  }
-  void add(const Band& o, double scale = 1.0) {
-    for (std::size_t k = 0; k < a.size(); ++k) a[k] += scale * o.a[k];
-  }
-  [[nodiscard]] double trace() const {
-    double t = 0.0;
-    for (int I = 0; I < n; ++I) t += at(I, I);
-    return t;
-  }
-};
-
-// In-place Cholesky factor L (N = L·Lᵀ) of a band matrix, row by row (the band keeps no fill outside it):
-// L_IJ = (N_IJ − Σ_{m<J} L_Im L_Jm) / L_JJ. Each entry of row I, once known, is taken at once from all the row's
-// later entries (L_IJ' −= L_IJ · L_J'J, J' > J), so that the row's sums advance side by side instead of one long
-// chain of dependent subtractions after another; each sum still takes its terms in the order m = 0, 1, …, so the
-// factor is the same to the last bit.
-bool cholesky(Band& L) {
-  const int b = L.b;
-  const std::size_t stride = static_cast<std::size_t>(b) + 1;
-  for (int I = 0; I < L.n; ++I) {
-    const int m0 = std::max(0, I - b);
-    double* rowI = &L.a[static_cast<std::size_t>(I) * stride + static_cast<std::size_t>(m0 - I + b)];  // L_I,m0+t
-    const int width = I - m0;
-    for (int t = 0; t < width; ++t) {
-      const int J = m0 + t;
-      const double l = rowI[t] / L.at(J, J);
-      rowI[t] = l;
-      // L_J',J for J' = J+1 … I: b doubles apart (one band row on, one column back).
-      const double* column = &L.a[static_cast<std::size_t>(J + 1) * stride + static_cast<std::size_t>(b - 1)];
-      for (int t2 = t + 1; t2 < width; ++t2) rowI[t2] -= l * column[static_cast<std::size_t>(t2 - t - 1) * b];
-      rowI[width] -= l * l;
-    }
-    const double s = rowI[width];
-    if (!(s > 0.0) || !std::isfinite(s)) return false;
-    rowI[width] = std::sqrt(s);
-  }
-  return true;
-}
-
-// x = (L·Lᵀ)⁻¹ r for the three columns of r (n × 3, row major), in place.
-void solve(const Band& L, std::vector<double>& r) {
-  const int n = L.n, b = L.b;
-  for (int I = 0; I < n; ++I) {
-    for (int c = 0; c < 3; ++c) {
-      double s = r[3 * I + c];
-      for (int m = std::max(0, I - b); m < I; ++m) s -= L.at(I, m) * r[3 * m + c];
-      r[3 * I + c] = s / L.at(I, I);
-    }
-  }
-  for (int I = n - 1; I >= 0; --I) {
-    for (int c = 0; c < 3; ++c) {
-      double s = r[3 * I + c];
-      for (int k = I + 1; k <= std::min(n - 1, I + b); ++k) s -= L.at(k, I) * r[3 * k + c];
-      r[3 * I + c] = s / L.at(I, I);
-    }
-  }
-}
-
-// The entries of Z = (L·Lᵀ)⁻¹ inside the band (Takahashi, Fagan and Chin 1973): from Lᵀ·Z = L⁻¹, whose upper
-// triangle is diag(1/L_ii), Z_ij = (δ_ij / L_ii − Σ_{k>i} L_ki Z_kj) / L_ii for j ≥ i, from the last row up.
-// Every Z_kj the sum needs has i < k, j ≤ i + b, inside the band already computed. Upper half by rows:
-// Z(i, j), i ≤ j ≤ i + b, at z[i·(b+1) + j − i].
-// Row i's sums for j > i advance side by side, one k at a time (each still takes its terms in the order k = i+1, i+2,
-// …: the same Z to the last bit), over contiguous memory: Z_kj for j ≥ k is row k of z, and for j < k (Z_jk) row k of
-// a copy of the band's lower half, kept for the b rows below i only (a ring of b + 1 rows).
-std::vector<double> band_inverse(const Band& L) {
-  const int n = L.n, b = L.b;
-  const std::size_t stride = static_cast<std::size_t>(b) + 1;
-  std::vector<double> z(static_cast<std::size_t>(n) * stride, 0.0);
-  // lower(k, j) = Z_jk for k − b ≤ j < k, at ring[(k mod (b+1))·(b+1) + j − k + b].
-  std::vector<double> ring(stride * stride, 0.0);
-  auto ring_row = [&](int k) { return &ring[static_cast<std::size_t>(k % (b + 1)) * stride]; };
-  std::vector<double> column(stride), sum(stride);
-  for (int i = n - 1; i >= 0; --i) {
-    const int last = std::min(n - 1, i + b);
-    const int width = last - i;
-    for (int k = i + 1; k <= last; ++k) column[static_cast<std::size_t>(k - i)] = L.at(k, i);
-    const double d = L.at(i, i);
-    std::fill(sum.begin(), sum.begin() + width + 1, 0.0);  // sum[j − i], j = i+1 … last
-    for (int k = i + 1; k <= last; ++k) {
-      const double c = column[static_cast<std::size_t>(k - i)];
-      const double* lower = ring_row(k) + (b - k + i);                          // lower[j − i] = Z_jk, j < k
-      const double* upper = &z[static_cast<std::size_t>(k) * stride] - (k - i);  // upper[j − i] = Z_kj, j ≥ k
-      for (int t = 1; t < k - i; ++t) sum[static_cast<std::size_t>(t)] -= c * lower[t];
-      for (int t = k - i; t <= width; ++t) sum[static_cast<std::size_t>(t)] -= c * upper[t];
-    }
-    double* zi = &z[static_cast<std::size_t>(i) * stride];
-    for (int t = 1; t <= width; ++t) {
-      zi[t] = sum[static_cast<std::size_t>(t)] / d;
-      ring_row(i + t)[static_cast<std::size_t>(b - t)] = zi[t];  // lower(i + t, i)
-    }
-    double s = 1.0 / d;
-    for (int t = 1; t <= width; ++t) s -= column[static_cast<std::size_t>(t)] * zi[t];
-    zi[0] = s / d;
-  }
-  return z;
-}
-
-// rᵀ·Z·r over the unknowns idx[0..m) (all within the band of each other), Z in band_inverse's layout, in two steps
-// for runs of points under one basis row: Z's entries there gathered once into a dense symmetric block
-// (block[a·m + c], both triangles), then each point's form from it: a basis row's variance factor, or its leverage.
-void gather_block(const std::vector<double>& Z, int b, const int* idx, int m, double* block) {
-  for (int a = 0; a < m; ++a) {
-    for (int c = a; c < m; ++c) {
-      const int I = std::min(idx[a], idx[c]), J = std::max(idx[a], idx[c]);
-      block[a * m + c] = block[c * m + a] = Z[static_cast<std::size_t>(I) * (b + 1) + (J - I)];
-    }
-  }
-}
-
-// As a full matrix–vector product: twice the products of the triangle's, but in vector registers, where the
-// triangle's are a chain of dependent additions (a bicubic row: about 130 ns that way, a few times less this way;
-// bicubic rows now have their own form, below, and this serves the biquadratic ones).
-template <int M>
-double fixed_quadratic_form(const double* block, const double* r) {
-  const Eigen::Map<const Eigen::Matrix<double, M, M>> B(block);
-  const Eigen::Map<const Eigen::Matrix<double, M, 1>> x(r);
-  const Eigen::Matrix<double, M, 1> y = B * x;
-  return x.dot(y);
-}
-
-// A bicubic row's form, the pipeline's every fit (17 cross-validation trials of every point at 10 000 points): the
-// product summed column by column in four 4-vectors that stay in registers. As many instructions as Eigen's general
-// matrix–vector kernel, which B * x calls at this size (about 560 a row, callgrind), but without its set-up for any
-// size: the 10 000-point case's fit 23.8 → 22.3 ms (21 runs interleaved). The sums' order differs from the kernel's,
-// so the scores differ in their last bits; the λ chosen, and so the output, were the same on every case measured.
-double bicubic_quadratic_form(const double* block, const double* r) {
-  using Piece = Eigen::Matrix<double, 4, 1>;
-  Piece y0 = Piece::Zero(), y1 = Piece::Zero(), y2 = Piece::Zero(), y3 = Piece::Zero();
-  for (int j = 0; j < 16; ++j) {
-    const double x = r[j];
-    const double* column = block + 16 * j;
-    y0 += Eigen::Map<const Piece>(column) * x;
-    y1 += Eigen::Map<const Piece>(column + 4) * x;
-    y2 += Eigen::Map<const Piece>(column + 8) * x;
-    y3 += Eigen::Map<const Piece>(column + 12) * x;
-  }
-  return Eigen::Map<const Piece>(r).dot(y0) + Eigen::Map<const Piece>(r + 4).dot(y1) +
-         Eigen::Map<const Piece>(r + 8).dot(y2) + Eigen::Map<const Piece>(r + 12).dot(y3);
-}
-
-double block_quadratic_form(const double* block, const double* r, int m) {
-  switch (m) {
-    case 16: return bicubic_quadratic_form(block, r);  // bicubic: every fit of the pipeline
-    case 9: return fixed_quadratic_form<9>(block, r);
-    default: {
-      const Eigen::Map<const Eigen::MatrixXd> B(block, m, m);
-      const Eigen::Map<const Eigen::VectorXd> x(r, m);
-      double buffer[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
-      Eigen::Map<Eigen::VectorXd> y(buffer, m);
-      y.noalias() = B * x;
-      return x.dot(y);
-    }
-  }
-}
+// The band algebra is in band.cpp, the thin-plate penalty in penalty.cpp.
+using detail::Band;
+using detail::Ordering;
+using detail::ThinPlateTerms;
+using detail::band_inverse;
+using detail::block_quadratic_form;
+using detail::cholesky;
+using detail::gather_block;
+using detail::solve;
+using detail::thin_plate_energy;
 
 bool inside(const nurbs::Domain& d, const SurfaceParameter& t) {
   return t.u >= d.u0 && t.u <= d.u1 && t.v >= d.v0 && t.v <= d.v1;
 }
-
-// Gauss–Legendre on [−1, 1], five nodes: exact for the polynomial (non-rational) energy up to degree 5 surfaces.
-constexpr std::array<double, 5> kGaussNodes = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
-                                               0.9061798459386640};
-constexpr std::array<double, 5> kGaussWeights = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
-                                                 0.4786286704993665, 0.2369268850561891};
 
 // Points per assembly chunk: chunks are fixed by the number of points alone and summed in order, so the sums (and
 // the fit) do not depend on the thread count.
@@ -366,103 +188,6 @@ DataTerms assemble_data(const Surface& s, std::span<const Point3> net, const Ord
   return std::move(out);
 }
 
-// The thin-plate energy's three terms, each a band matrix: G(θ) = θ·G_ss + G_st + G_tt/θ (θ = 1: the isotropic
-// energy). θ < 1 lets the fit bend along s more readily than along t: a wave or crease running across the face
-// along t is followed without the freedom to wiggle along it as well.
-struct ThinPlateTerms {
-  Band uu, uv, vv;
-  [[nodiscard]] Band combined(double theta) const {
-    Band G = uv;
-    G.add(uu, theta);
-    G.add(vv, 1.0 / theta);
-    return G;
-  }
-};
-
-// The thin-plate energy's matrix G: Σ_spans φ_s ∫∫_span (R_ss R_ssᵀ + 2 R_st R_stᵀ + R_tt R_ttᵀ) ds dt, s = L_u·u,
-// t = L_v·v, by 5 × 5 Gauss points per span. Chunks of u spans in a fixed number, summed in order.
-// With `D` (n × 3, the displacement of the control net) it also writes each span's roughness of that
-// displacement (its energy over the span's area) to `roughness` and builds no matrix.
-ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span<const double> span_weights,
-                                 const std::vector<double>* D = nullptr, std::vector<double>* roughness = nullptr) {
-  const int n = s.num_u() * s.num_v();
-  const int p = s.p(), q = s.q();
-  const std::vector<double> bu = s.U().breakpoints();
-  const std::vector<double> bv = s.V().breakpoints();
-  const int nsu = static_cast<int>(bu.size()) - 1, nsv = static_cast<int>(bv.size()) - 1;
-  // The mean speeds: millimetres per unit of u and of v.
-  double Lu = 0.0, Lv = 0.0;
-  {
-    const nurbs::Domain d = s.domain();
-    constexpr int kSamples = 9;
-    for (int a = 0; a < kSamples; ++a) {
-      for (int c = 0; c < kSamples; ++c) {
-        const nurbs::SurfaceD1 e = nurbs::derivatives_d1(s, d.u0 + (d.u1 - d.u0) * (a + 0.5) / kSamples,
-                                                         d.v0 + (d.v1 - d.v0) * (c + 0.5) / kSamples);
-        Lu += e.Su.norm();
-        Lv += e.Sv.norm();
-      }
-    }
-    Lu = std::max(Lu / (kSamples * kSamples), 1e-12);
-    Lv = std::max(Lv / (kSamples * kSamples), 1e-12);
-  }
-  // ds dt = Lu Lv du dv; d_ss = d_uu / Lu², d_st = d_uv / (Lu Lv), d_tt = d_vv / Lv².
-  const double cuu = Lu * Lv / std::pow(Lu, 4), cuv = 2.0 * Lu * Lv / (Lu * Lu * Lv * Lv), cvv = Lu * Lv / std::pow(Lv, 4);
-  const int chunks = std::min(nsu, 8);
-  std::vector<ThinPlateTerms> parts(static_cast<std::size_t>(chunks));
-  if (roughness) roughness->assign(static_cast<std::size_t>(nsu) * nsv, 0.0);
-  tbb::parallel_for(0, chunks, [&](int c) {
-    ThinPlateTerms& G = parts[static_cast<std::size_t>(c)];
-    if (!D) G = ThinPlateTerms{Band(n, b), Band(n, b), Band(n, b)};
-    RationalBasisD2 d2;
-    int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
-    const int m = (p + 1) * (q + 1);
-    for (int a = nsu * c / chunks; a < nsu * (c + 1) / chunks; ++a) {
-      const double ua = bu[static_cast<std::size_t>(a)], ub = bu[static_cast<std::size_t>(a) + 1];
-      const int su = s.U().find_span(0.5 * (ua + ub));
-      for (int e = 0; e < nsv; ++e) {
-        const double phi = D ? 1.0 : span_weights.empty() ? 1.0 : span_weights[static_cast<std::size_t>(a) * nsv + e];
-        if (phi == 0.0) continue;
-        double energy = 0.0;
-        const double va = bv[static_cast<std::size_t>(e)], vb = bv[static_cast<std::size_t>(e) + 1];
-        const int sv = s.V().find_span(0.5 * (va + vb));
-        const double jac = 0.25 * (ub - ua) * (vb - va) * phi;
-        for (std::size_t gu = 0; gu < kGaussNodes.size(); ++gu) {
-          const double u = 0.5 * (ua + ub) + 0.5 * (ub - ua) * kGaussNodes[gu];
-          for (std::size_t gv = 0; gv < kGaussNodes.size(); ++gv) {
-            const double v = 0.5 * (va + vb) + 0.5 * (vb - va) * kGaussNodes[gv];
-            detail::rational_basis_d2(s, su, sv, u, v, d2);
-            for (int k = 0; k < m; ++k) idx[k] = order.index(d2.i0 + k / (q + 1), d2.j0 + k % (q + 1));
-            const double w = jac * kGaussWeights[gu] * kGaussWeights[gv];
-            if (D) {
-              Vector3 duu = Vector3::Zero(), duv = Vector3::Zero(), dvv = Vector3::Zero();
-              for (int k = 0; k < m; ++k) {
-                const Vector3 d((*D)[3 * idx[k]], (*D)[3 * idx[k] + 1], (*D)[3 * idx[k] + 2]);
-                duu += d2.Ruu[k] * d;
-                duv += d2.Ruv[k] * d;
-                dvv += d2.Rvv[k] * d;
-              }
-              energy += w * (cuu * duu.squaredNorm() + cuv * duv.squaredNorm() + cvv * dvv.squaredNorm());
-              continue;
-            }
-            G.uu.add_outer(idx, d2.Ruu, m, w * cuu);
-            G.uv.add_outer(idx, d2.Ruv, m, w * cuv);
-            G.vv.add_outer(idx, d2.Rvv, m, w * cvv);
-          }
-        }
-        // The span's area in mm²: its parameter area times Lu·Lv (jac holds a quarter of the parameter area).
-        if (D) (*roughness)[static_cast<std::size_t>(a) * nsv + e] = energy / (4.0 * jac * Lu * Lv);
-      }
-    }
-  });
-  if (D) return {};
-  for (int c = 1; c < chunks; ++c) {
-    parts[0].uu.add(parts[static_cast<std::size_t>(c)].uu);
-    parts[0].uv.add(parts[static_cast<std::size_t>(c)].uv);
-    parts[0].vv.add(parts[static_cast<std::size_t>(c)].vv);
-  }
-  return std::move(parts[0]);
-}
 
 // One trial λ: the factor, the displacement, the residual sum of squares and tr H.
 struct Trial {

@@ -1,0 +1,110 @@
+#include "penalty.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "rational_basis.hpp"
+
+namespace probecomp::fitting::detail {
+
+using nurbs::Surface;
+
+namespace {
+
+// Gauss–Legendre on [−1, 1], five nodes: exact for the polynomial (non-rational) energy up to degree 5 surfaces.
+constexpr std::array<double, 5> kGaussNodes = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
+                                               0.9061798459386640};
+constexpr std::array<double, 5> kGaussWeights = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
+                                                 0.4786286704993665, 0.2369268850561891};
+
+}  // namespace
+
+// The thin-plate energy's matrix G: Σ_spans φ_s ∫∫_span (R_ss R_ssᵀ + 2 R_st R_stᵀ + R_tt R_ttᵀ) ds dt, s = L_u·u,
+// t = L_v·v, by 5 × 5 Gauss points per span. Chunks of u spans in a fixed number, summed in order.
+// With `D` (n × 3, the displacement of the control net) it also writes each span's roughness of that
+// displacement (its energy over the span's area) to `roughness` and builds no matrix.
+ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span<const double> span_weights,
+                                 const std::vector<double>* D, std::vector<double>* roughness) {
+  const int n = s.num_u() * s.num_v();
+  const int p = s.p(), q = s.q();
+  const std::vector<double> bu = s.U().breakpoints();
+  const std::vector<double> bv = s.V().breakpoints();
+  const int nsu = static_cast<int>(bu.size()) - 1, nsv = static_cast<int>(bv.size()) - 1;
+  // The mean speeds: millimetres per unit of u and of v.
+  double Lu = 0.0, Lv = 0.0;
+  {
+    const nurbs::Domain d = s.domain();
+    constexpr int kSamples = 9;
+    for (int a = 0; a < kSamples; ++a) {
+      for (int c = 0; c < kSamples; ++c) {
+        const nurbs::SurfaceD1 e = nurbs::derivatives_d1(s, d.u0 + (d.u1 - d.u0) * (a + 0.5) / kSamples,
+                                                         d.v0 + (d.v1 - d.v0) * (c + 0.5) / kSamples);
+        Lu += e.Su.norm();
+        Lv += e.Sv.norm();
+      }
+    }
+    Lu = std::max(Lu / (kSamples * kSamples), 1e-12);
+    Lv = std::max(Lv / (kSamples * kSamples), 1e-12);
+  }
+  // ds dt = Lu Lv du dv; d_ss = d_uu / Lu², d_st = d_uv / (Lu Lv), d_tt = d_vv / Lv².
+  const double cuu = Lu * Lv / std::pow(Lu, 4), cuv = 2.0 * Lu * Lv / (Lu * Lu * Lv * Lv), cvv = Lu * Lv / std::pow(Lv, 4);
+  const int chunks = std::min(nsu, 8);
+  std::vector<ThinPlateTerms> parts(static_cast<std::size_t>(chunks));
+  if (roughness) roughness->assign(static_cast<std::size_t>(nsu) * nsv, 0.0);
+  tbb::parallel_for(0, chunks, [&](int c) {
+    ThinPlateTerms& G = parts[static_cast<std::size_t>(c)];
+    if (!D) G = ThinPlateTerms{Band(n, b), Band(n, b), Band(n, b)};
+    RationalBasisD2 d2;
+    int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
+    const int m = (p + 1) * (q + 1);
+    for (int a = nsu * c / chunks; a < nsu * (c + 1) / chunks; ++a) {
+      const double ua = bu[static_cast<std::size_t>(a)], ub = bu[static_cast<std::size_t>(a) + 1];
+      const int su = s.U().find_span(0.5 * (ua + ub));
+      for (int e = 0; e < nsv; ++e) {
+        const double phi = D ? 1.0 : span_weights.empty() ? 1.0 : span_weights[static_cast<std::size_t>(a) * nsv + e];
+        if (phi == 0.0) continue;
+        double energy = 0.0;
+        const double va = bv[static_cast<std::size_t>(e)], vb = bv[static_cast<std::size_t>(e) + 1];
+        const int sv = s.V().find_span(0.5 * (va + vb));
+        const double jac = 0.25 * (ub - ua) * (vb - va) * phi;
+        for (std::size_t gu = 0; gu < kGaussNodes.size(); ++gu) {
+          const double u = 0.5 * (ua + ub) + 0.5 * (ub - ua) * kGaussNodes[gu];
+          for (std::size_t gv = 0; gv < kGaussNodes.size(); ++gv) {
+            const double v = 0.5 * (va + vb) + 0.5 * (vb - va) * kGaussNodes[gv];
+            detail::rational_basis_d2(s, su, sv, u, v, d2);
+            for (int k = 0; k < m; ++k) idx[k] = order.index(d2.i0 + k / (q + 1), d2.j0 + k % (q + 1));
+            const double w = jac * kGaussWeights[gu] * kGaussWeights[gv];
+            if (D) {
+              Vector3 duu = Vector3::Zero(), duv = Vector3::Zero(), dvv = Vector3::Zero();
+              for (int k = 0; k < m; ++k) {
+                const Vector3 d((*D)[3 * idx[k]], (*D)[3 * idx[k] + 1], (*D)[3 * idx[k] + 2]);
+                duu += d2.Ruu[k] * d;
+                duv += d2.Ruv[k] * d;
+                dvv += d2.Rvv[k] * d;
+              }
+              energy += w * (cuu * duu.squaredNorm() + cuv * duv.squaredNorm() + cvv * dvv.squaredNorm());
+              continue;
+            }
+            G.uu.add_outer(idx, d2.Ruu, m, w * cuu);
+            G.uv.add_outer(idx, d2.Ruv, m, w * cuv);
+            G.vv.add_outer(idx, d2.Rvv, m, w * cvv);
+          }
+        }
+        // The span's area in mm²: its parameter area times Lu·Lv (jac holds a quarter of the parameter area).
+        if (D) (*roughness)[static_cast<std::size_t>(a) * nsv + e] = energy / (4.0 * jac * Lu * Lv);
+      }
+    }
+  });
+  if (D) return {};
+  for (int c = 1; c < chunks; ++c) {
+    parts[0].uu.add(parts[static_cast<std::size_t>(c)].uu);
+    parts[0].uv.add(parts[static_cast<std::size_t>(c)].uv);
+    parts[0].vv.add(parts[static_cast<std::size_t>(c)].vv);
+  }
+  return std::move(parts[0]);
+}
+
+}  // namespace probecomp::fitting::detail
