@@ -83,7 +83,7 @@ double fixed_quadratic_form(const double* block, const double* r) {
 // A bicubic row's form, the pipeline's every fit (17 cross-validation trials of every point at 10 000 points): the
 // product summed column by column in four 4-vectors that stay in registers. As many instructions as Eigen's general
 // matrix–vector kernel, which B * x calls at this size (about 560 a row, callgrind), but without its set-up for any
-// size: the 10 000-point case's fit 23.8 → 22.3 ms (21 runs interleaved). The sums' order differs from the kernel's,
+// size (a faster fit: docs/performance.md). The sums' order differs from the kernel's,
 // so the scores differ in their last bits; the λ chosen, and so the output, were the same on every case measured.
 inline double bicubic_quadratic_form(const double* block, const double* r) {
   using Piece = Eigen::Matrix<double, 4, 1>;

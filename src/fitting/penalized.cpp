@@ -256,7 +256,7 @@ CvRows cv_rows(const Surface& s, std::span<const Point3> net, const Ordering& or
 
 // The leave-one-out terms of rows [first, last), in order (see leave_one_out); M is the row length m when fixed at
 // compile time (Eigen::Dynamic otherwise), so that a bicubic row's products stay in vector registers, as in
-// block_quadratic_form (the 10 000-point case's 17 trials: 22.8 ms a point at a time from the band, 8.5 ms so).
+// block_quadratic_form (timings in docs/performance.md).
 template <int M>
 double leave_one_out_terms(const CvRows& rows, std::size_t first, std::size_t last, const std::vector<double>& D,
                            const std::vector<double>& Z, int b) {
@@ -440,8 +440,8 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   // The penalty's matrix is made side by side with the cross-validation's rows and the data's normal equations, each
   // still in its own fixed order (the same numbers), so that one's serial parts (the rows' counting sort, the sums of
   // the chunks) leave no core idle. Where the rows are every point's (the 10 000-point case), the normal equations
-  // are summed from them after they are made, one basis evaluation a point instead of two (its fit 17.3 → 15.9 ms,
-  // 15 runs interleaved); else each point's basis row is made for them, side by side with the rows.
+  // are summed from them after they are made, one basis evaluation a point instead of two; else each point's basis
+  // row is made for them, side by side with the rows.
   DataTerms data;
   ThinPlateTerms terms;
   CvRows rows;
