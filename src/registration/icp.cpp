@@ -1,7 +1,5 @@
 #include "probecomp/registration/icp.hpp"
 
-#include "probecomp/geometry/statistics.hpp"
-
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
@@ -19,10 +17,10 @@
 
 #include "probecomp/geometry/point_tree.hpp"
 #include "probecomp/nurbs/osculating_patch.hpp"
+#include "icp_state.hpp"
 
 namespace probecomp::registration {
 
-using nurbs::ClosestPointStatus;
 using nurbs::OsculatingPatch;
 
 const char* to_string(Metric metric) {
@@ -49,7 +47,7 @@ struct Step {
   bool finite = true;
 };
 
-// Extrapolate an update (see iterate) only when it and the one before point the same way to within about 8°
+// Extrapolate an update (see Convergence) only when it and the one before point the same way to within about 8°
 // and it is clearly smaller: a steady linear convergence, not an oscillation or a first large move.
 constexpr double kAitkenCosine = 0.99;
 constexpr double kAitkenMaxRatio = 0.7;
@@ -65,10 +63,6 @@ constexpr double kSlideReach = 2.0;
 // errors against the truth unchanged to 0.1 nm.
 constexpr double kCoarseToleranceFactor = 10.0;
 constexpr double kCoarseReachFactor = 2.154434690031884;  // 10^(1/3)
-
-bool usable(const cad::ModelPoint& m, double max_distance) {
-  return m.ok() && !m.on_trim_edge && m.status != ClosestPointStatus::OnBoundary && std::abs(m.distance) <= max_distance;
-}
 
 // The step of one iteration from the points x (CAD frame), their feet and weights w (0: unused), as a motion
 // about the data's centroid c (carried along with the data) with rotations scaled by their RMS radius L. With
@@ -185,18 +179,6 @@ Step estimate(Metric metric, std::span<const Point3> x, std::span<const cad::Mod
   return step;
 }
 
-// The fewest points a block holds in passes that evaluate the surface or a patch (tens to hundreds of ns a point:
-// 10 000 points in one block of the default grain would leave a core idle).
-constexpr std::size_t kEvaluatingGrain = 1024;
-
-// f(first, last) over consecutive blocks of at least `grain` points of [0, n), in parallel: for the per-point passes
-// of each step, which write only their own points' entries.
-template <class F>
-void for_blocks(std::size_t n, F&& f, std::size_t grain = 1 << 14) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
-                    [&](const tbb::blocked_range<std::size_t>& range) { f(range.begin(), range.end()); });
-}
-
 std::string describe(double mm_value) {
   std::ostringstream s;
   s.precision(2);
@@ -204,179 +186,73 @@ std::string describe(double mm_value) {
   return s.str();
 }
 
+// Robust weights make ICP an iteratively reweighted least squares, which converges linearly: successive
+// updates point the same way and shrink by a steady ratio ρ (about 0.2 with Cauchy weights on Gaussian
+// noise, against quadratic convergence without weights). When two updates agree so, the remaining ones sum
+// to ρ/(1 − ρ) of the last, and taking them at once (Aitken's extrapolation along the same screw) saves the
+// iterations; the next step corrects what the extrapolation misses.
+class Convergence {
+ public:
+  explicit Convergence(const Criteria& criteria) : criteria_(criteria) {}
+
+  // The update to take for an estimated step: the step itself, or its extrapolation. `length` is the data's radius.
+  geometry::RigidTransform accelerate(const geometry::RigidTransform& step, double length) {
+    geometry::RigidTransform motion = step;
+    const geometry::Twist xi = geometry::to_twist(step);
+    geometry::Twist scaled = xi;
+    scaled.head<3>() *= length;  // rotation as the motion it gives at the data's radius, comparable with mm
+    if (previous_step_.norm() > 0.0 && scaled.norm() > 0.0) {
+      const double ratio = scaled.norm() / previous_step_.norm();
+      const double cosine = scaled.dot(previous_step_) / (scaled.norm() * previous_step_.norm());
+      if (cosine > kAitkenCosine && ratio < kAitkenMaxRatio) motion = geometry::from_twist(xi / (1.0 - ratio));
+    }
+    previous_step_ = scaled;
+    return motion;
+  }
+
+  // How far an update may move the points and still count as converged, mm, for `used` points of robust scale `scale`.
+  [[nodiscard]] double tolerance(double scale, std::size_t used) const {
+    return std::max(criteria_.motion_tolerance,
+                    criteria_.relative_motion_tolerance * scale / std::sqrt(static_cast<double>(used)));
+  }
+
+ private:
+  const Criteria& criteria_;
+  geometry::Twist previous_step_ = geometry::Twist::Zero();
+};
+
 // The ICP loop on all `machine_points`. `hints` (empty, or one per point) start the first pass's Newton.
 RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point3> machine_points,
                            const RegistrationOptions& options, std::vector<cad::ModelPoint> hints,
                            std::span<const double> offsets, double slide_reach = kSlideReach) {
+  using Search = detail::IcpState::Search;
   RegistrationResult result;
   const std::size_t n = machine_points.size();
   const std::size_t needed = options.metric == Metric::PointToPlane ? 6 : 3;
+  const bool hinted_start = !hints.empty();
+  detail::IcpState state(model, machine_points, options, std::move(hints), offsets);
+  detail::DataFrame frame;  // set on the first step
+  Convergence convergence(options.criteria);
   geometry::RigidTransform to_cad = options.initial.inverse();
 
-  std::vector<Point3> x(n);
-  std::vector<cad::ModelPoint> feet = std::move(hints);  // the model's closest points: the next pass's hints
-  // With offsets, each foot moved out along its normal by its point's offset: the targets the estimate uses.
-  std::vector<cad::ModelPoint> moved;
-  const std::vector<cad::ModelPoint>& targets = offsets.empty() ? feet : moved;
-  std::vector<double> r(n), w(n);
-  std::vector<char> use(n, 0);  // the point's correspondence enters the estimate (its weight may still be 0)
-  std::vector<double> used_r;
-  // The surface about each target to second order, for the slides between searches: from a local search's Newton,
-  // else made at the first slide after the search (a search that confirms convergence needs none).
-  std::vector<OsculatingPatch> patches;
-  bool patches_current = false;
-  double scale = options.robust.min_scale;
-  double max_radius = 0.0;
-  Point3 centre = Point3::Zero();
-  Point3 centroid = Point3::Zero();
-  double length = 1.0;
-
-  // Robust weights and scale from the residuals r of the points in use.
-  auto reweigh = [&]() {
-    // The used residuals gathered in parallel: each chunk's count, then its copies at its offset.
-    constexpr std::size_t kChunks = 64;
-    std::array<std::size_t, kChunks + 1> offset{};
-    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
-      std::size_t count = 0;
-      for (std::size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i) count += use[i] != 0;
-      offset[c + 1] = count;
-    });
-    for (std::size_t c = 0; c < kChunks; ++c) offset[c + 1] += offset[c];
-    used_r.resize(offset[kChunks]);
-    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
-      std::size_t at = offset[c];
-      for (std::size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i) {
-        if (use[i]) used_r[at++] = r[i];
-      }
-    });
-    scale = geometry::robust_scale_in_place(used_r, options.robust.min_scale);  // used_r is rebuilt at every call
-    for_blocks(n, [&](std::size_t first, std::size_t last) {
-      for (std::size_t i = first; i < last; ++i) w[i] = use[i] ? robust_weight(options.robust.loss, r[i], scale) : 0.0;
-    });
-    return used_r.size();
-  };
-
-  // Each target's patch from the surface's derivatives at its foot; `missing_only`: only where the search gave none.
-  auto make_patches = [&](bool missing_only) {
-    const cad::Model& cad_model = model.model();
-    patches.resize(n, OsculatingPatch::invalid());
-    for_blocks(n, [&](std::size_t first, std::size_t last) {
-      for (std::size_t i = first; i < last; ++i) {
-        if (missing_only && patches[i].valid()) continue;
-        const cad::ModelPoint& m = feet[i];
-        patches[i] = OsculatingPatch::invalid();
-        if (!m.ok() || m.face < 0 || !x[i].allFinite()) continue;
-        const cad::Face& face = cad_model.faces[static_cast<std::size_t>(m.face)];
-        patches[i] = OsculatingPatch::at(nurbs::derivatives_d2(face.surface, m.u, m.v), m.normal,
-                                         offsets.empty() ? 0.0 : offsets[i]);
-      }
-    }, kEvaluatingGrain);
-    patches_current = true;
-  };
-  // Correspondences at the current transform. The first pass searches the whole model; later ones start
-  // Newton from the previous feet and, while the estimate moves, skip re-searching each point's own face for
-  // other minima (Local). Convergence is only accepted after an exact pass (the global search, bounded by the
-  // local answer) has confirmed the correspondences.
-  using Search = cad::ModelLocator::HintedSearch;
-  auto correspond = [&](Search mode) {
-    for_blocks(n, [&](std::size_t first, std::size_t last) {
-      for (std::size_t i = first; i < last; ++i) x[i] = to_cad * machine_points[i];
-    });
-    if (patches_current) {
-      // After slides, Newton starts from the parameters each foot's paraboloid predicts where the point now is, not
-      // from the foot's own: off by about κt² instead of t (t the slide's tangential part), one Newton step fewer.
-      const cad::Model& cad_model = model.model();
-      for_blocks(n, [&](std::size_t first, std::size_t last) {
-        for (std::size_t i = first; i < last; ++i) {
-          if (!patches[i].valid() || !x[i].allFinite()) continue;
-          const OsculatingPatch::Prediction p = patches[i].predict(targets[i].point, targets[i].normal, x[i]);
-          const nurbs::Domain dom = cad_model.faces[static_cast<std::size_t>(feet[i].face)].surface.domain();
-          feet[i].u = std::clamp(feet[i].u + p.du, dom.u0, dom.u1);
-          feet[i].v = std::clamp(feet[i].v + p.dv, dom.v0, dom.v1);
-        }
-      }, kEvaluatingGrain);
-    }
-    patches_current = false;
-    if (feet.empty()) {
-      feet = model.closest_points(x);
-    } else if (mode == Search::Local && options.metric == Metric::PointToPlane && offsets.empty()) {
-      // Slides follow a local search: Newton's own derivatives give most patches (a million points: 90 ms less).
-      patches.resize(n);
-      model.update_closest_points(x, feet, mode, patches);
-      make_patches(true);
-    } else {
-      model.update_closest_points(x, feet, mode);
-    }
-    if (!offsets.empty()) moved.resize(n);
-    for_blocks(n, [&](std::size_t first, std::size_t last) {
-      for (std::size_t i = first; i < last; ++i) {
-        if (!offsets.empty()) {
-          moved[i] = feet[i];
-          moved[i].point += offsets[i] * moved[i].normal;
-          moved[i].distance -= offsets[i];
-        }
-        const cad::ModelPoint& m = targets[i];
-        use[i] = x[i].allFinite() && usable(m, options.max_distance);
-        r[i] = !use[i] ? 0.0 : options.metric == Metric::PointToPlane ? m.distance : (x[i] - m.point).norm();
-      }
-    });
-    return reweigh();
-  };
-  // Between searches the points move against their targets' osculating paraboloids (osculating_patch.hpp) rather
-  // than searching again: a pass over the arrays instead of a closest-point search each step, while reweighting
-  // converges the robust weights (IRLS, linear: many steps). The paraboloid also gives the parameters of each point's
-  // foot, so a point whose foot crosses its face's edge or trim leaves the estimate (or joins it) as the next search
-  // would have it. Tangent planes saw neither the curvature, which fixes the motions a gently curved face fixes only
-  // weakly, nor the edges: a million points on the demo's panel needed 3 searches (the one after the slides still
-  // moved them 9e-5 mm, from 38 points that crossed the panel's edge); with paraboloids the one after the slides
-  // confirms.
-  auto slide = [&](const geometry::RigidTransform& motion) {
-    if (!patches_current) make_patches(false);
-    const cad::Model& cad_model = model.model();
-    for_blocks(n, [&](std::size_t first, std::size_t last) {
-      for (std::size_t i = first; i < last; ++i) {
-        x[i] = motion * x[i];
-        const cad::ModelPoint& m = targets[i];
-        if (!patches[i].valid()) {
-          if (use[i]) r[i] = m.normal.dot(x[i] - m.point);
-          continue;
-        }
-        const OsculatingPatch::Prediction p = patches[i].predict(m.point, m.normal, x[i]);
-        const cad::Face& face = cad_model.faces[static_cast<std::size_t>(m.face)];
-        const nurbs::Domain dom = face.surface.domain();
-        const double u = m.u + p.du, v = m.v + p.dv;
-        // Strictly inside: a foot on the domain's edge is a constrained minimum, which the estimate does not use. A
-        // foot that crosses a closed face's seam is taken for one that left the face: the search after the slides
-        // finds it again (a search more, not a different answer).
-        const bool inside = u > dom.u0 && u < dom.u1 && v > dom.v0 && v < dom.v1 &&
-                            (!face.trimmed() || face.trim->contains(u, v));
-        use[i] = x[i].allFinite() && inside && std::abs(p.distance) <= options.max_distance;
-        r[i] = use[i] ? p.distance : 0.0;
-      }
-    }, kEvaluatingGrain);
-    return reweigh();
-  };
-
   result.status = Status::MaxIterations;
-  geometry::Twist previous_step = geometry::Twist::Zero();
   bool exact = true;         // the correspondences of this step are exact closest points
   bool search_next = true;   // the next step searches its correspondences (else it slides on the last ones' planes)
   Search next = Search::Local;
   geometry::RigidTransform last_motion = geometry::RigidTransform::Identity();
-  const bool hinted_start = !feet.empty();
   double drift = 0.0;  // largest motion of a point since its correspondence was found, mm
   double reach = 0.0;  // how far points may slide on their osculating paraboloids before a new search, mm
-  std::size_t used = 0;
   for (int it = 1; it <= options.criteria.max_iterations; ++it) {
     const bool fresh = search_next;  // correspondences found at the current transform
+    std::size_t used = 0;
     if (fresh) {
       exact = (it == 1 && !hinted_start) || next == Search::Exact;
-      used = correspond(next);
+      used = state.correspondences(to_cad, next);
       ++result.searches;
       drift = 0.0;
-      reach = slide_reach * scale;
+      reach = slide_reach * state.scale();
     } else {
-      used = slide(last_motion);
+      used = state.slide(last_motion);
     }
     result.iterations = it;
     if (used < needed) {
@@ -385,61 +261,25 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
                            " points have a usable correspondence (not on a face edge, found, finite)";
       break;
     }
-    if (it == 1) {
-      // The points' box centre and radius bound how far an update moves any of them. Their centroid and RMS
-      // radius are the twist's frame; both travel with the data.
-      BoundingBox box;
-      std::size_t finite = 0;
-      for (const Point3& p : x) {
-        if (!p.allFinite()) continue;
-        box.extend(p);
-        centroid += p;
-        ++finite;
-      }
-      centroid /= static_cast<double>(finite);
-      double L2 = 0.0;
-      for (const Point3& p : x) {
-        if (p.allFinite()) L2 += (p - centroid).squaredNorm();
-      }
-      // A length for the rotation scale even when all points coincide (then no rotation is fixed anyway).
-      length = std::max(std::sqrt(L2 / static_cast<double>(finite)), 1e-3);
-      centre = 0.5 * (box.min + box.max);
-      max_radius = 0.5 * box.diagonal();
-    }
-    const Step step = estimate(options.metric, x, targets, w, fresh ? std::span<const OsculatingPatch>() : patches,
-                               centroid, length);
+    if (it == 1) frame = detail::DataFrame::of(state.points());
+
+    const Step step = estimate(options.metric, state.points(), state.targets(), state.weights(),
+                               fresh ? std::span<const OsculatingPatch>() : state.patches(), frame.centroid,
+                               frame.length);
     result.constraints = step.constraints;
     if (!step.finite) {
       result.status = Status::NumericalError;
       result.stop_reason = "the estimate is not finite (degenerate correspondences)";
       break;
     }
-    // Robust weights make ICP an iteratively reweighted least squares, which converges linearly: successive
-    // updates point the same way and shrink by a steady ratio ρ (about 0.2 with Cauchy weights on Gaussian
-    // noise, against quadratic convergence without weights). When two updates agree so, the remaining ones sum
-    // to ρ/(1 − ρ) of the last, and taking them at once (Aitken's extrapolation along the same screw) saves the
-    // iterations; the next step corrects what the extrapolation misses.
-    geometry::RigidTransform motion = step.motion;
-    const geometry::Twist xi = geometry::to_twist(step.motion);
-    geometry::Twist scaled = xi;
-    scaled.head<3>() *= length;  // rotation as the motion it gives at the data's radius, comparable with mm
-    if (previous_step.norm() > 0.0 && scaled.norm() > 0.0) {
-      const double ratio = scaled.norm() / previous_step.norm();
-      const double cosine = scaled.dot(previous_step) / (scaled.norm() * previous_step.norm());
-      if (cosine > kAitkenCosine && ratio < kAitkenMaxRatio) motion = geometry::from_twist(xi / (1.0 - ratio));
-    }
-    previous_step = scaled;
+
+    const geometry::RigidTransform motion = convergence.accelerate(step.motion, frame.length);
     to_cad = motion * to_cad;
     last_motion = motion;
-    // The update acts on the points in the CAD frame; their box moves with them, so bound about its image.
-    const double moved = geometry::largest_motion(motion, centre, max_radius);
-    centre = motion * centre;
-    centroid = motion * centroid;
-    const double tolerance =
-        std::max(options.criteria.motion_tolerance,
-                 options.criteria.relative_motion_tolerance * scale / std::sqrt(static_cast<double>(used)));
+    const double moved = frame.move(motion);
     drift += moved;
-    if (moved <= tolerance) {
+
+    if (moved <= convergence.tolerance(state.scale(), used)) {
       if (fresh && exact) {
         result.status = Status::Converged;
         result.stop_reason = "converged: the last update moved no point more than " + describe(moved);
@@ -461,36 +301,13 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
 
   // The correspondences reported are the last pass's: at the final transform to within the motion tolerance
   // when converged; otherwise an exact pass at the final transform.
-  if (n > 0 && result.status != Status::NumericalError && result.status != Status::Converged) correspond(Search::Exact);
-  result.transform = to_cad.inverse();
-  result.scale = scale;
-  result.matches.resize(n);
-  double ss = 0.0;
-  result.used = 0;
-  result.inliers = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    PointMatch& pm = result.matches[i];
-    if (i < targets.size()) {
-      const cad::ModelPoint& m = targets[i];
-      pm.status = m.status;
-      pm.face = m.face;
-      pm.u = m.u;
-      pm.v = m.v;
-      pm.distance = m.distance;
-      pm.on_edge = m.ok() && (m.on_trim_edge || m.status == ClosestPointStatus::OnBoundary);
-    }
-    pm.weight = w[i];
-    result.used += use[i];
-    pm.inlier = use[i] && std::abs(r[i]) <= kOutlierSigmas * scale;
-    if (pm.inlier) {
-      ++result.inliers;
-      ss += pm.distance * pm.distance;
-    }
+  if (n > 0 && result.status != Status::NumericalError && result.status != Status::Converged) {
+    state.correspondences(to_cad, Search::Exact);
   }
-  result.rms = result.inliers > 0 ? std::sqrt(ss / result.inliers) : 0.0;
+  result.transform = to_cad.inverse();
+  state.finish(result);
   return result;
 }
-
 }  // namespace
 
 RegistrationResult register_points(const cad::ModelLocator& model, std::span<const Point3> machine_points,

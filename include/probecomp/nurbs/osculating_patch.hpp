@@ -1,9 +1,9 @@
 #pragma once
 // A face near a foot point to second order: its osculating paraboloid. ICP moves the points between closest-point
-// searches against it (icp.cpp). The signed distance of a point then comes out right to third order in its
-// tangential offset from the foot, and so do its parameters, so a slide also sees a foot cross a face's edge. With
-// a tangent plane only the first order is right. A tangent plane also misses the turn of the normal, which is what
-// fixes the motions that a gently curved face fixes only weakly.
+// searches against it (registration/icp_state.hpp). The signed distance of a point then comes out right to third
+// order in its tangential offset from the foot, and so do its parameters, so a slide also sees a foot cross a face's
+// edge. With a tangent plane only the first order is right. A tangent plane also misses the turn of the normal, which
+// is what fixes the motions that a gently curved face fixes only weakly.
 //
 // At a foot p with unit normal n, let x = p + d, h = n·d and t = d − h n. With J = [S_u S_v], the first form
 // I = JᵀJ, the second form II = [n·S_uu n·S_uv; n·S_uv n·S_vv] and A = I⁻¹Jᵀ, the parameter step to x's foot is

@@ -74,7 +74,7 @@ struct RegistrationResult {
   double rms = 0.0;            // RMS distance of the inliers, mm
   double scale = 0.0;          // robust scale σ̂ of the residuals at the end, mm
   int iterations = 0;           // on all points
-  int searches = 0;             // closest-point searches of all points; the other iterations slide (see icp.cpp)
+  int searches = 0;             // closest-point searches of all points; the other iterations slide (see icp_state.hpp)
   int coarse_iterations = 0;    // on the subset first (large point sets; see kCoarseStagePoints)
   int starts = 1;               // starting transforms tried (more than one: a coarse alignment, credibility.hpp)
   int left_out = 0;             // points the fits flagged that a second registration left out (0: registered once)
