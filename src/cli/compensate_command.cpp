@@ -66,12 +66,12 @@ struct Loaded {
 };
 
 // Each row's tip radius in mm: its own where the file gives one, else the default (--probe-radius, mm). A row with
-// neither is an error naming its line; so is a file without radii and no default.
+// neither is an InputError naming its line; so is a file without radii and no default (one problem, one kind).
 std::vector<double> tip_radii(const io::PointTable& t, std::optional<double> default_mm, const std::string& path) {
   if (!t.radii) {
     if (!default_mm) {
-      throw std::invalid_argument("--probe-radius is needed: " + path +
-                                  " gives no tip radius of its own (a column r, DMIS SNSDEF/SNSLCT or QIF ProbeRadius)");
+      throw InputError("--probe-radius is needed: " + path +
+                       " gives no tip radius of its own (a column r, DMIS SNSDEF/SNSLCT or QIF ProbeRadius)");
     }
     return {};
   }

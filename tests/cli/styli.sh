@@ -77,7 +77,7 @@ check "[ $rc -eq 3 ]" "a row without a radius and no default: exit 3 (input erro
 check "awk -F, 'NR == 5 { exit !(\$11 == \"1.000000000\") }' '$W/gap_out.csv'" "the empty r took --probe-radius"
 expect_error "--probe-radius is needed" "$W/none_out.csv" \
   "$P" compensate --cad "$PANEL" --points "$W/r1/raw.csv" --output "$W/none_out.csv"
-check "[ $rc -eq 2 ]" "no radius anywhere: exit 2 (usage)"
+check "[ $rc -eq 3 ]" "no radius anywhere: exit 3 (input error), as a row without one"
 for bad in 0 -1 abc; do
   awk -F, -v OFS=, -v bad="$bad" 'NR == 7 { $NF = bad } { print }' "$W/mixed.csv" >"$W/bad.csv"
   expect_error "bad.csv:7: column 'r'" "$W/bad_out.csv" \
