@@ -24,7 +24,7 @@ packages=(
 )
 if [ "${1:-}" = "--tests" ]; then
   packages+=(
-    python3                     # tests/io/check_report.py: the report's numbers against the JSON, its screenshot
+    python3                     # tests/results/check_report.py: the report's numbers against the JSON, its screenshot
     python3-pytest              # the Python package's tests (tests/python)
     python3-matplotlib          # the example examples/compensate_and_plot.py draws with it
     chromium                    # renders the HTML report headless: no console error, the 3-D view not blank

@@ -1,5 +1,5 @@
 #!/bin/sh
-# Issue 22: the HTML report, checked by tests/io/check_report.py (self-contained; its numbers the JSON's; rendered by
+# Issue 22: the HTML report, checked by tests/results/check_report.py (self-contained; its numbers the JSON's; rendered by
 # headless Chromium offline with no console message, the 3-D view drawn and not blank) on
 #  - the demo's own report.html, and compensate --report --json --tolerance on the demo's files;
 #  - a real CAD sample with simulated points: the die-casting part (asitus_repatch-hpdc.stp), faces 0-20, no
@@ -14,7 +14,7 @@ P=$1; CAD=$2; W=$3; LIGHT=${4:-}
 rm -rf "$W"; mkdir -p "$W"
 fail=0
 . "$(dirname "$0")/lib.sh"
-CHECK="python3 $(dirname "$0")/../io/check_report.py"
+CHECK="python3 $(dirname "$0")/../results/check_report.py"
 command -v chromium >/dev/null || { echo "FAIL: chromium is not installed (scripts/setup.sh --tests installs it)"; exit 1; }
 
 "$P" demo --output-dir "$W/demo" >/dev/null || { echo "FAIL: demo"; fail=1; }
