@@ -13,6 +13,7 @@
 #include <string>
 
 #include "probecomp/studies/freeform_study.hpp"
+#include "support/light.hpp"
 
 namespace {
 
@@ -42,11 +43,13 @@ void add_run(const studies::FreeformStudyResult& r, Coverage& c) {
 // The bar is 85 % in every region of one run; pooled over seeds the region's coverage estimates its
 // probability, which should be near the 95 % of ±2u: 90 % is asked. (Without the penalty's bias estimate in u,
 // the worst pooled region read about 85 % on the steep dent and on the random points; with it, 94.7 and 94.1 %.)
+// The sanitizer build runs one seed (support/light.hpp), held to the one run's bar.
 void expect_covers(const Coverage& c, const std::string& what) {
+  const double region_bar = test::kLight ? 0.85 : 0.90;
   EXPECT_GE(c.overall(), 0.90) << what;
   EXPECT_LE(c.overall(), 0.99) << what;
   for (int g = 0; g < 16; ++g) {
-    EXPECT_GE(c.region(g), 0.90) << what << ", region " << g / 4 << "," << g % 4;
+    EXPECT_GE(c.region(g), region_bar) << what << ", region " << g / 4 << "," << g % 4;
   }
   std::printf("%s: coverage of ±2u %.1f %%, worst region %.1f %%\n", what.c_str(), 100.0 * c.overall(),
               100.0 * [&] {
@@ -64,7 +67,7 @@ void expect_covers(const Coverage& c, const std::string& what) {
 // The variant `o` run with noise seeds 1–3, its regions pooled.
 Coverage over_three_seeds(studies::FreeformStudyOptions o) {
   Coverage c;
-  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+  for (const std::uint64_t seed : test::cases<std::uint64_t>({1, 2, 3})) {
     o.seed = seed;
     add_run(studies::run_freeform_study(o), c);
   }
@@ -89,7 +92,7 @@ TEST(FreeformStudy, UncertaintyCoversTheTrueErrorOnThePanelAndInEachRegion_Steep
 // the fit grew from 782 to 1 595 control points, the std of the errors rose from 0.88 to 1.14 µm and up to 3 rows
 // were flagged (bench/fit_cases with REPEATS=0.1, 3 seeds). Each position is now fitted once.
 TEST(FreeformStudy, AReadingRecordedTwiceIsFittedOnceAndBothRowsComeBackTheSame) {
-  for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+  for (const std::uint64_t seed : test::cases<std::uint64_t>({1, 2})) {
     studies::FreeformStudyOptions o;
     o.seed = seed;
     o.repeated_fraction = 0.1;
