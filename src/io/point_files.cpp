@@ -6,15 +6,6 @@
 
 namespace probecomp::io {
 
-const char* to_string(PointFormat f) {
-  switch (f) {
-    case PointFormat::Csv: return "CSV";
-    case PointFormat::Dmis: return "DMIS";
-    case PointFormat::Qif: return "QIF";
-  }
-  return "?";
-}
-
 PointFormat point_format(const std::filesystem::path& path) {
   if (is_dmis(path)) return PointFormat::Dmis;
   if (is_qif(path)) return PointFormat::Qif;

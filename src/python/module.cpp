@@ -33,6 +33,8 @@ namespace py = pybind11;
 
 namespace probecomp::python {
 
+namespace {
+
 // The words a Hint (probecomp/error.hpp) takes in Python: the keyword arguments of probecomp.compensate and
 // probecomp.read_points.
 std::string hint_words(Hint hint) {
@@ -49,8 +51,6 @@ std::string hint_words(Hint hint) {
   }
   return "";
 }
-
-namespace {
 
 using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
 

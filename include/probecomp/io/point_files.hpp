@@ -12,7 +12,6 @@
 namespace probecomp::io {
 
 enum class PointFormat { Csv, Dmis, Qif };
-[[nodiscard]] const char* to_string(PointFormat f);
 
 // By extension, in any case: .dmo/.dmi/.dms DMIS, .qif QIF, anything else CSV (a CSV may have any name).
 [[nodiscard]] PointFormat point_format(const std::filesystem::path& path);
