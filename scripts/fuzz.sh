@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (fuzz/, clang with AddressSanitizer and UndefinedBehaviorSanitizer) in build-fuzz/ and
-# runs each for SECONDS (default 30) from its seed corpus: fuzz/corpus/TARGET, plus the CAD files for the CAD
-# targets and the QIF sample for the QIF one. Exits non-zero if any target crashes, leaks or trips a sanitizer;
-# libFuzzer leaves the input as build-fuzz/findings/crash-* (keep it as a regression test). Prints the executions of
-# each target.
+# runs each for SECONDS (default 30), as many at once as there are cores, from its seed corpus: fuzz/corpus/TARGET,
+# plus the CAD files for the CAD targets and the QIF sample for the QIF one. Exits non-zero if any target crashes,
+# leaks or trips a sanitizer; libFuzzer leaves the input as build-fuzz/findings/crash-* (keep it as a regression
+# test). Prints the executions of each target.
 #   scripts/fuzz.sh [SECONDS] [TARGET...]      (targets: points_csv points_dmis points_qif transform cad_step cad_iges)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,8 +19,9 @@ export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"
 export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp:print_suppressions=0}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 mkdir -p build-fuzz/findings
-failed=0
-for target in "${targets[@]}"; do
+# One target: its line of summary on standard output, status 1 if it failed.
+fuzz_one() {
+  local target=$1
   # The working corpus grows in build-fuzz/corpus; the seeds in the source tree are only read.
   work="build-fuzz/corpus/$target"
   mkdir -p "$work"
@@ -50,7 +51,18 @@ for target in "${targets[@]}"; do
     # A status above 128 with no report in the log is a death by that signal minus 128 that nothing could catch.
     echo "fuzz_$target: FAILED with status $status (see $log)"
     tail -20 "$log"
-    failed=1
+    return 1
   fi
+}
+# The targets side by side, one per core (each libFuzzer process is single-threaded), their summaries in order.
+for target in "${targets[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$(nproc)" ]; do wait -n || true; done
+  fuzz_one "$target" >"build-fuzz/findings/$target.summary" &
+done
+wait
+failed=0
+for target in "${targets[@]}"; do
+  cat "build-fuzz/findings/$target.summary"
+  if grep -q FAILED "build-fuzz/findings/$target.summary"; then failed=1; fi
 done
 exit $failed

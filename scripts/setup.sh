@@ -15,6 +15,7 @@ packages=(
   libnanoflann-dev              # k-d tree for nearest seeds
   libcli11-dev                  # command line
   libpugixml-dev                # XML: QIF 3.0 point files in and out
+  nlohmann-json3-dev            # JSON: the statistics, the studies' summaries, the report's data
   libxml2-utils                 # xmllint: the tests validate every QIF file written against the QIF 3.0 schemas
   libtbb-dev                    # oneTBB threads
   libgtest-dev                  # GoogleTest

@@ -13,7 +13,6 @@ namespace probecomp::cli {
 
 // The commands format numbers as the result files do.
 using io::fmt;
-using io::json_string;
 using io::mm;
 using io::unit;
 

@@ -22,6 +22,7 @@
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "probecomp/io/format.hpp"
+#include "probecomp/io/json.hpp"
 #include "probecomp/io/output_files.hpp"
 #include "probecomp/io/point_files.hpp"
 #include "probecomp/io/point_table.hpp"
@@ -42,7 +43,6 @@ constexpr int kExitCad = 4;           // probecomp::CadError: a CAD file that ca
 constexpr int kExitRegistration = 5;  // probecomp::RegistrationError
 constexpr int kExitFit = 6;           // probecomp::FitError
 using cli::fmt;
-using cli::json_string;
 using cli::mm;
 using cli::unit;
 
@@ -94,21 +94,29 @@ int run_info(const std::string& part, bool json) {
   }
   std::ostringstream out;
   if (json) {
-    out << "{\"file\": " << json_string(part) << ", \"units\": \"mm\", \"file_units\": " << json_string(model.file_units)
-        << ",\n \"faces\": [\n";
-    for (std::size_t k = 0; k < model.faces.size(); ++k) {
-      const cad::Face& f = model.faces[k];
+    io::Json faces = io::Json::array();
+    for (const cad::Face& f : model.faces) {
       const BoundingBox b = nurbs::bounding_box(f.surface);
-      out << "  {\"index\": " << f.index << ", \"name\": " << json_string(f.name) << ", \"type\": " << json_string(f.source_type)
-          << ", \"degree\": [" << f.surface.p() << ", " << f.surface.q() << "], \"poles\": [" << f.surface.num_u() << ", "
-          << f.surface.num_v() << "], \"rational\": " << (f.surface.is_rational() ? "true" : "false")
-          << ", \"trimmed\": " << (f.trimmed() ? "true" : "false") << ", \"material_side\": "
-          << (f.material_known ? "\"solid\"" : "\"unknown\"") << ", \"bbox\": {\"min\": [" << mm(b.min.x()) << ", "
-          << mm(b.min.y()) << ", " << mm(b.min.z()) << "], \"max\": [" << mm(b.max.x()) << ", " << mm(b.max.y()) << ", "
-          << mm(b.max.z()) << "]}}" << (k + 1 < model.faces.size() ? "," : "") << "\n";
+      const auto corner = [](const Point3& p) {
+        return io::Json::array({io::json_fixed(p.x(), 9), io::json_fixed(p.y(), 9), io::json_fixed(p.z(), 9)});
+      };
+      faces.push_back({{"index", f.index},
+                       {"name", f.name},
+                       {"type", f.source_type},
+                       {"degree", {f.surface.p(), f.surface.q()}},
+                       {"poles", {f.surface.num_u(), f.surface.num_v()}},
+                       {"rational", f.surface.is_rational()},
+                       {"trimmed", f.trimmed()},
+                       {"material_side", f.material_known ? "solid" : "unknown"},
+                       {"bbox", {{"min", corner(b.min)}, {"max", corner(b.max)}}}});
     }
-    out << " ],\n \"totals\": {\"faces\": " << model.faces.size() << ", \"rational\": " << rational
-        << ", \"trimmed\": " << trimmed << ", \"in_solids\": " << solid << "}}\n";
+    const io::Json info = {{"file", part},
+                           {"units", "mm"},
+                           {"file_units", model.file_units},
+                           {"faces", faces},
+                           {"totals",
+                            {{"faces", model.faces.size()}, {"rational", rational}, {"trimmed", trimmed}, {"in_solids", solid}}}};
+    out << io::json_text(info);
   } else {
     out << "# " << part << ": units mm (file: " << model.file_units << ")\n";
     out << "# face  type        degree  poles     rational  trimmed  material  bbox min (mm)  bbox max (mm)\n";

@@ -18,6 +18,7 @@
 #include "probecomp/geometry/stopwatch.hpp"
 #include "probecomp/io/charts.hpp"
 #include "probecomp/io/format.hpp"
+#include "probecomp/io/json.hpp"
 #include "probecomp/io/output_files.hpp"
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/studies/analytic_cylinder.hpp"
@@ -144,9 +145,14 @@ std::string html_section(const std::string& id, const std::string& heading, cons
 // The paper's numbers as the paper prints them (0.0014, 16.7), ours as our JSON does.
 std::string paper_number(double v) { return fmt("%g", v); }
 
-std::string json_summary(const studies::ErrorSummary& s) {
-  return "{\"points\": " + std::to_string(s.points) + ", \"std\": " + fmt("%.9f", s.std) + ", \"mean\": " +
-         fmt("%.9f", s.mean) + ", \"min\": " + fmt("%.9f", s.min) + ", \"max\": " + fmt("%.9f", s.max) + "}";
+// Lengths in the studies' JSON to 1e-9 mm, as in their CSV.
+io::Json length(double mm) { return io::json_fixed(mm, 9); }
+// A figure given to a few significant digits (a noise level, a peak, a ratio: %g).
+io::Json figure(double v) { return io::json_number(v, 6); }
+
+io::Json json_summary(const studies::ErrorSummary& s) {
+  return {{"points", s.points}, {"std", length(s.std)}, {"mean", length(s.mean)}, {"min", length(s.min)},
+          {"max", length(s.max)}};
 }
 
 registration::RegistrationOptions registration_options(const std::string& metric, const std::string& loss) {
@@ -159,17 +165,14 @@ registration::RegistrationOptions registration_options(const std::string& metric
   return o;
 }
 
-std::string json_pose_error(const studies::PoseError& e) {
-  std::string out = "{";
-  for (std::size_t c = 0; c < 6; ++c) {
-    out += std::string(c ? ", " : "") + "\"" + studies::kPoseComponents[c] + "\": " + fmt("%.6e", e[c]);
-  }
-  return out + "}";
+io::Json json_pose_error(const studies::PoseError& e) {
+  io::Json out = io::Json::object();
+  for (std::size_t c = 0; c < 6; ++c) out[studies::kPoseComponents[c]] = io::json_number(e[c], 7);
+  return out;
 }
 
-std::string json_statistics(const studies::ErrorStatistics& s) {
-  return "{\"std\": " + json_pose_error(s.std) + ", \"mean\": " + json_pose_error(s.mean) +
-         ", \"ci95\": " + json_pose_error(s.ci95) + "}";
+io::Json json_statistics(const studies::ErrorStatistics& s) {
+  return {{"std", json_pose_error(s.std)}, {"mean", json_pose_error(s.mean)}, {"ci95", json_pose_error(s.ci95)}};
 }
 
 int run_study_registration(const StudyArgs& a) {
@@ -222,18 +225,19 @@ int run_study_registration(const StudyArgs& a) {
   std::cout << t.str();
 
   {
-    std::ostringstream j;
-    j << "{\"study\": \"registration\", \"units\": {\"rotation\": \"deg\", \"translation\": \"mm\"},\n"
-      << " \"trials\": " << options.trials << ", \"points\": " << r.points << ", \"noise_mm\": " << options.noise
-      << ", \"probe_radius_mm\": " << options.probe_radius << ", \"metric\": \""
-      << registration::to_string(options.registration.metric) << "\", \"loss\": \""
-      << registration::to_string(options.registration.robust.loss) << "\",\n"
-      << " \"proposed\": " << json_statistics(r.proposed.stats) << ",\n"
-      << " \"conventional\": " << json_statistics(r.conventional.stats) << ",\n"
-      << " \"converged_trials\": {\"proposed\": " << r.proposed.converged << ", \"conventional\": " << r.conventional.converged
-      << "},\n"
-      << " \"paper\": {\"proposed\": " << json_statistics(paper.proposed) << ",\n"
-      << "           \"conventional\": " << json_statistics(paper.conventional) << "}}\n";
+    const io::Json j = {
+        {"study", "registration"},
+        {"units", {{"rotation", "deg"}, {"translation", "mm"}}},
+        {"trials", options.trials},
+        {"points", r.points},
+        {"noise_mm", figure(options.noise)},
+        {"probe_radius_mm", figure(options.probe_radius)},
+        {"metric", registration::to_string(options.registration.metric)},
+        {"loss", registration::to_string(options.registration.robust.loss)},
+        {"proposed", json_statistics(r.proposed.stats)},
+        {"conventional", json_statistics(r.conventional.stats)},
+        {"converged_trials", {{"proposed", r.proposed.converged}, {"conventional", r.conventional.converged}}},
+        {"paper", {{"proposed", json_statistics(paper.proposed)}, {"conventional", json_statistics(paper.conventional)}}}};
     std::ostringstream c;
     c << "trial,route,rx_deg,ry_deg,rz_deg,tx_mm,ty_mm,tz_mm\n";
     for (const auto& [name, route] : {std::pair{"proposed", &r.proposed}, std::pair{"conventional", &r.conventional}}) {
@@ -287,7 +291,7 @@ int run_study_registration(const StudyArgs& a) {
         {svg},
         html_table({"std of the error", "rx (deg)", "ry (deg)", "rz (deg)", "tx (mm)", "ty (mm)", "tz (mm)"}, rows));
     write_study_files(output_dir, "registration",
-                      {.csv = c.str(), .json = j.str(), .figures = {{"registration.svg", svg}}, .section = section});
+                      {.csv = c.str(), .json = io::json_text(j), .figures = {{"registration.svg", svg}}, .section = section});
   }
   return 0;
 }
@@ -352,12 +356,20 @@ int run_study_analytic_cylinder(const StudyArgs& a) {
     << fmt("%.2f", t0.seconds()) << " s\n";
   std::cout << t.str();
 
-  std::ostringstream j;
-  j << "{\"study\": \"analytic-cylinder\", \"units\": \"mm\",\n"
-    << " \"max_error_mm\": " << fmt("%.9f", example_max.error) << ", \"theta_deg\": " << fmt("%.6f", example_max.theta_deg)
-    << ", \"R_mm\": 10, \"r_mm\": 3, \"dy_mm\": 1.62, \"paper_reads_mm\": 0.03,\n"
-    << " \"fig3\": {\"R_mm\": 10, \"r_mm\": 1, \"dy_mm\": 2, \"max_error_mm\": " << fmt("%.9f", fig3_max.error)
-    << ", \"theta_deg\": " << fmt("%.6f", fig3_max.theta_deg) << "}}\n";
+  const io::Json j = {{"study", "analytic-cylinder"},
+                      {"units", "mm"},
+                      {"max_error_mm", length(example_max.error)},
+                      {"theta_deg", io::json_fixed(example_max.theta_deg, 6)},
+                      {"R_mm", 10},
+                      {"r_mm", 3},
+                      {"dy_mm", 1.62},
+                      {"paper_reads_mm", 0.03},
+                      {"fig3",
+                       {{"R_mm", 10},
+                        {"r_mm", 1},
+                        {"dy_mm", 2},
+                        {"max_error_mm", length(fig3_max.error)},
+                        {"theta_deg", io::json_fixed(fig3_max.theta_deg, 6)}}}};
 
   const std::string fig3_svg = io::line_chart_svg(
       {fig3_line, {.name = "largest", .x = {fig3_max.theta_deg}, .y = {fig3_max.error}}},
@@ -387,7 +399,7 @@ int run_study_analytic_cylinder(const StudyArgs& a) {
                              fmt("%.6f", example_max.theta_deg), "about 0.03 (read off Fig. 5)"}}}));
   write_study_files(a.output_dir, "analytic-cylinder",
                     {.csv = csv.str(),
-                     .json = j.str(),
+                     .json = io::json_text(j),
                      .figures = {{"analytic-cylinder-fig3.svg", fig3_svg}, {"analytic-cylinder-fig5.svg", fig5_svg}},
                      .section = section});
   return 0;
@@ -418,7 +430,7 @@ int run_study_cylinder(const StudyArgs& a, bool deformation) {
   t << line;
   std::ostringstream csv;
   csv << "peak_mm,misalignment_mm,sigma_mm,method,points,mean_mm,std_mm,min_mm,max_mm,untrusted\n";
-  std::ostringstream rows;
+  io::Json rows = io::Json::array();
   for (std::size_t k = 0; k < r.rows.size(); ++k) {
     const studies::CylinderStudyRow& w = r.rows[k];
     std::snprintf(line, sizeof line, "%9.1f %9.0f | %12.3f %12.3f | %12.3f %12.3f | %d of %d\n", w.peak, 1000 * w.sigma,
@@ -431,23 +443,28 @@ int run_study_cylinder(const StudyArgs& a, bool deformation) {
           << s->points << ',' << fmt("%.9f", s->mean) << ',' << fmt("%.9f", s->std) << ',' << fmt("%.9f", s->min) << ','
           << fmt("%.9f", s->max) << ',' << untrusted << '\n';
     }
-    rows << "  {\"peak_mm\": " << fmt("%g", w.peak) << ", \"misalignment_mm\": " << fmt("%g", w.misalignment)
-         << ", \"sigma_mm\": " << fmt("%g", w.sigma) << ", \"conventional\": " << json_summary(w.conventional)
-         << ", \"cad\": " << json_summary(w.cad) << ", \"cad_untrusted\": " << w.cad_untrusted << "}"
-         << (k + 1 < r.rows.size() ? "," : "") << "\n";
+    rows.push_back({{"peak_mm", figure(w.peak)},
+                    {"misalignment_mm", figure(w.misalignment)},
+                    {"sigma_mm", figure(w.sigma)},
+                    {"conventional", json_summary(w.conventional)},
+                    {"cad", json_summary(w.cad)},
+                    {"cad_untrusted", w.cad_untrusted}});
   }
   const bool better = r.cad_better_everywhere(), smooths = r.cad_smooths_noise();
   t << "\nCAD-based |mean| and std below the conventional's in every row: " << (better ? "yes" : "NO") << "\n"
     << "CAD-based std below sigma wherever sigma >= 10 um: " << (smooths ? "yes" : "NO") << "\n"
     << fmt("%.2f", t0.seconds()) << " s\n";
   std::cout << t.str();
-  std::ostringstream j;
-  j << "{\"study\": \"" << name << "\", \"units\": \"mm\", \"cylinder_radius_mm\": " << o.part.radius
-    << ", \"arc_deg\": " << o.part.arc_end - o.part.arc_start << ", \"length_mm\": " << o.part.length
-    << ", \"probe_radius_mm\": " << o.probe_radius << ", \"grid\": [" << o.grid << ", " << o.grid << "],\n"
-    << " \"cad_better_everywhere\": " << (better ? "true" : "false")
-    << ", \"cad_std_below_sigma_from_10um\": " << (smooths ? "true" : "false") << ",\n \"rows\": [\n"
-    << rows.str() << " ]}\n";
+  const io::Json j = {{"study", name},
+                      {"units", "mm"},
+                      {"cylinder_radius_mm", figure(o.part.radius)},
+                      {"arc_deg", figure(o.part.arc_end - o.part.arc_start)},
+                      {"length_mm", figure(o.part.length)},
+                      {"probe_radius_mm", figure(o.probe_radius)},
+                      {"grid", {o.grid, o.grid}},
+                      {"cad_better_everywhere", better},
+                      {"cad_std_below_sigma_from_10um", smooths},
+                      {"rows", rows}};
 
   // Fig. 8 / 9: mean and std against σ, in µm as printed; one line per method (and peak), conventional dashed.
   std::vector<io::Series> mean_lines, std_lines;
@@ -505,7 +522,7 @@ int run_study_cylinder(const StudyArgs& a, bool deformation) {
           (smooths ? "yes" : "NO") + ".",
       {svg}, html_table(header, table));
   write_study_files(a.output_dir, name,
-                    {.csv = csv.str(), .json = j.str(), .figures = {{name + ".svg", svg}}, .section = section});
+                    {.csv = csv.str(), .json = io::json_text(j), .figures = {{name + ".svg", svg}}, .section = section});
   return 0;
 }
 
@@ -513,7 +530,8 @@ int run_study_cylinder(const StudyArgs& a, bool deformation) {
 // its u and u's coverage of the true errors), freeform-noise.csv and freeform-noise.json.
 int run_study_freeform_noise(const StudyArgs& a) {
   const geometry::Stopwatch t0;
-  std::ostringstream t, csv, rows;
+  std::ostringstream t, csv;
+  io::Json rows = io::Json::array();
   t << "The paper's free-form case (§7.3) at " << a.noise.size() << " noise levels, seed " << a.seed
     << ": 7200 grid points, probe radius 1 mm.\n"
     << "Errors: signed distance of each compensated point from the actual surface, um, over the rows each method\n"
@@ -551,17 +569,17 @@ int run_study_freeform_noise(const StudyArgs& a) {
         << fmt("%.9f", d.std) << ',' << fmt("%.9f", d.mean) << ',' << fmt("%.9f", d.max_abs()) << ',' << r.flagged << ','
         << fmt("%.9f", r.mean_uncertainty) << ',' << fmt("%.4f", r.coverage_2u) << ','
         << fmt("%.4f", r.worst_region_coverage_2u) << '\n';
-    rows << "  {\"sigma_mm\": " << fmt("%g", a.noise[i]) << ", \"conventional\": " << json_summary(c)
-         << ", \"cad\": " << json_summary(d) << ", \"cad_flagged\": " << r.flagged
-         << ", \"mean_u_mm\": " << fmt("%.9f", r.mean_uncertainty) << ", \"coverage_2u\": " << fmt("%.4f", r.coverage_2u)
-         << ", \"worst_region_coverage_2u\": " << fmt("%.4f", r.worst_region_coverage_2u) << "}"
-         << (i + 1 < a.noise.size() ? "," : "") << "\n";
+    rows.push_back({{"sigma_mm", figure(a.noise[i])},
+                    {"conventional", json_summary(c)},
+                    {"cad", json_summary(d)},
+                    {"cad_flagged", r.flagged},
+                    {"mean_u_mm", length(r.mean_uncertainty)},
+                    {"coverage_2u", io::json_fixed(r.coverage_2u, 4)},
+                    {"worst_region_coverage_2u", io::json_fixed(r.worst_region_coverage_2u, 4)}});
   }
   t << fmt("%.2f", t0.seconds()) << " s\n";
   std::cout << t.str();
-  std::ostringstream j;
-  j << "{\"study\": \"freeform-noise\", \"units\": \"mm\", \"points\": 7200, \"seed\": " << a.seed
-    << ",\n \"rows\": [\n" << rows.str() << " ]}\n";
+  const io::Json j = {{"study", "freeform-noise"}, {"units", "mm"}, {"points", 7200}, {"seed", a.seed}, {"rows", rows}};
   const std::string svg = io::line_chart_svg(lines, {.title = "Free-form case: error against noise",
                                                      .x_label = "noise σ (µm)",
                                                      .y_label = "µm (log scale)",
@@ -581,7 +599,7 @@ int run_study_freeform_noise(const StudyArgs& a) {
                   "within ±2u", "worst of 4 × 4 regions"},
                  table));
   write_study_files(a.output_dir, "freeform-noise",
-                    {.csv = csv.str(), .json = j.str(), .figures = {{"freeform-noise.svg", svg}}, .section = section});
+                    {.csv = csv.str(), .json = io::json_text(j), .figures = {{"freeform-noise.svg", svg}}, .section = section});
   return 0;
 }
 
@@ -603,16 +621,19 @@ int run_study_freeform(const StudyArgs& a) {
         << ',' << compensation::to_string(r.cad.points[k].status) << '\n';
   }
   const studies::PaperTable2 paper = studies::paper_table2();
-  std::ostringstream j;
-  j << "{\"study\": \"freeform\", \"units\": \"mm\", \"points\": " << r.plan.size()
-    << ", \"noise_sigma_mm\": " << fmt("%g", r.freeform.noise_sigma) << ", \"seed\": " << a.seed << ",\n"
-    << " \"conventional\": " << json_summary(r.conventional_summary) << ",\n"
-    << " \"cad\": " << json_summary(r.cad_summary) << ",\n"
-    << " \"cad_uncertainty\": {\"mean_u_mm\": " << fmt("%.9f", r.mean_uncertainty) << ", \"coverage_2u\": "
-    << fmt("%.4f", r.coverage_2u) << ", \"worst_region_coverage_2u\": " << fmt("%.4f", r.worst_region_coverage_2u)
-    << ", \"flagged\": " << r.flagged << "},\n"
-    << " \"paper\": {\"conventional\": " << json_summary(paper.conventional) << ", \"cad\": " << json_summary(paper.proposed)
-    << "}}\n";
+  const io::Json j = {{"study", "freeform"},
+                      {"units", "mm"},
+                      {"points", r.plan.size()},
+                      {"noise_sigma_mm", figure(r.freeform.noise_sigma)},
+                      {"seed", a.seed},
+                      {"conventional", json_summary(r.conventional_summary)},
+                      {"cad", json_summary(r.cad_summary)},
+                      {"cad_uncertainty",
+                       {{"mean_u_mm", length(r.mean_uncertainty)},
+                        {"coverage_2u", io::json_fixed(r.coverage_2u, 4)},
+                        {"worst_region_coverage_2u", io::json_fixed(r.worst_region_coverage_2u, 4)},
+                        {"flagged", r.flagged}}},
+                      {"paper", {{"conventional", json_summary(paper.conventional)}, {"cad", json_summary(paper.proposed)}}}};
 
   // The two error distributions on common bins (µm), about 80 across the range of both.
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -666,7 +687,7 @@ int run_study_freeform(const StudyArgs& a) {
           " mm; the true error is within &#177;2u at " + fmt("%.4f", r.coverage_2u) + " of the trusted points (" +
           fmt("%.4f", r.worst_region_coverage_2u) + " in the worst of 4 &#215; 4 regions).</p>\n");
   write_study_files(a.output_dir, "freeform",
-                    {.csv = csv.str(), .json = j.str(), .figures = {{"freeform.svg", svg}}, .section = section});
+                    {.csv = csv.str(), .json = io::json_text(j), .figures = {{"freeform.svg", svg}}, .section = section});
   return 0;
 }
 

@@ -8,13 +8,16 @@
 
 #include "probecomp/io/charts.hpp"  // xml_escape
 #include "probecomp/io/format.hpp"
+#include "probecomp/io/json.hpp"
 #include "probecomp/version.hpp"
 #include "report_view.hpp"  // generated from src/results/report_view.js
 
 namespace probecomp::results {
 
 using io::fmt;
-using io::mm;
+using io::Json;
+using io::json_fixed;
+using io::json_text;
 using io::xml_escape;
 
 namespace {
@@ -150,62 +153,48 @@ std::string view_json(const compensation::CompensationResult& r, const ReportCon
   for (std::size_t k : shown) origin += pts[k].contact;
   if (!shown.empty()) origin /= static_cast<double>(shown.size());
 
-  std::ostringstream j;
-  auto coord = [&](const Point3& p) {
-    j << fmt("%.3f", p.x() - origin.x()) << ',' << fmt("%.3f", p.y() - origin.y()) << ','
-      << fmt("%.3f", p.z() - origin.z());
+  // Flat x, y, z triples, as report_view.js reads them.
+  const auto coord = [&](Json& to, const Point3& q) {
+    for (int a = 0; a < 3; ++a) to.push_back(json_fixed(q[a] - origin[a], 3));
   };
-  auto micro = [&](double v) {
-    if (std::isfinite(v)) j << fmt("%.2f", 1000.0 * v); else j << "null";
-  };
-  j << "{\"total\":" << n << ",\"origin\":[" << mm(origin.x()) << ',' << mm(origin.y()) << ',' << mm(origin.z())
-    << "],\n\"p\":[";
-  for (std::size_t i = 0; i < shown.size(); ++i) {
-    if (i) j << ',';
-    coord(pts[shown[i]].contact);
-  }
-  j << "],\n\"row\":[";
-  for (std::size_t i = 0; i < shown.size(); ++i) j << (i ? "," : "") << shown[i] + 1;
-  j << "],\n\"s\":[";
-  for (std::size_t i = 0; i < shown.size(); ++i) j << (i ? "," : "") << static_cast<int>(pts[shown[i]].status);
-  j << "],\n\"d\":[";
-  for (std::size_t i = 0; i < shown.size(); ++i) {
-    if (i) j << ',';
-    micro(pts[shown[i]].computed() ? pts[shown[i]].deviation : std::numeric_limits<double>::quiet_NaN());
-  }
-  j << "],\n\"u\":[";
+  const auto micro = [](double v) { return json_fixed(1000.0 * v, 2); };
+  Json p = Json::array(), row = Json::array(), s = Json::array(), d = Json::array(), u = Json::array();
   double u_max = 0.0;
-  for (std::size_t i = 0; i < shown.size(); ++i) {
-    if (i) j << ',';
-    const double u = pts[shown[i]].uncertainty;
-    micro(u);
-    if (std::isfinite(u)) u_max = std::max(u_max, 1000.0 * u);
+  for (std::size_t k : shown) {
+    coord(p, pts[k].contact);
+    row.push_back(k + 1);
+    s.push_back(static_cast<int>(pts[k].status));
+    d.push_back(micro(pts[k].computed() ? pts[k].deviation : std::numeric_limits<double>::quiet_NaN()));
+    u.push_back(micro(pts[k].uncertainty));
+    if (std::isfinite(pts[k].uncertainty)) u_max = std::max(u_max, 1000.0 * pts[k].uncertainty);
   }
-  j << "],\n\"u_max\":" << fmt("%.2f", u_max > 0.0 ? u_max : 1.0) << ",\"dev_range\":[" << fmt("%.2f", range.first)
-    << ',' << fmt("%.2f", range.second) << "],\"statuses\":[";
-  for (std::size_t s = 0; s < std::size(compensation::kPointStatuses); ++s) {
-    j << (s ? "," : "") << '"' << compensation::to_string(compensation::kPointStatuses[s]) << '"';
+  Json statuses = Json::array(), status_counts = Json::array();
+  for (const PointStatus st : compensation::kPointStatuses) {
+    statuses.push_back(compensation::to_string(st));
+    status_counts.push_back(r.count(st));
   }
-  j << "],\"status_counts\":[";
-  for (std::size_t s = 0; s < std::size(compensation::kPointStatuses); ++s) {
-    j << (s ? "," : "") << r.count(compensation::kPointStatuses[s]);
+  Json labelled = Json::array();
+  for (std::size_t k : worst) labelled.push_back(std::lower_bound(shown.begin(), shown.end(), k) - shown.begin());
+  Json lines = Json::array();
+  for (const cad::Polyline& l : c.nominal) {
+    Json line = Json::array();
+    for (const Point3& q : l) coord(line, q);
+    lines.push_back(line);
   }
-  j << "],\n\"worst\":[";
-  for (std::size_t w = 0; w < worst.size(); ++w) {
-    const auto at = std::lower_bound(shown.begin(), shown.end(), worst[w]) - shown.begin();
-    j << (w ? "," : "") << at;
-  }
-  j << "],\n\"lines\":[";
-  for (std::size_t l = 0; l < c.nominal.size(); ++l) {
-    j << (l ? ",\n[" : "[");
-    for (std::size_t i = 0; i < c.nominal[l].size(); ++i) {
-      if (i) j << ',';
-      coord(c.nominal[l][i]);
-    }
-    j << ']';
-  }
-  j << "]}";
-  return j.str();
+  const Json view = {{"total", n},
+                     {"origin", {json_fixed(origin.x(), 9), json_fixed(origin.y(), 9), json_fixed(origin.z(), 9)}},
+                     {"p", p},
+                     {"row", row},
+                     {"s", s},
+                     {"d", d},
+                     {"u", u},
+                     {"u_max", json_fixed(u_max > 0.0 ? u_max : 1.0, 2)},
+                     {"dev_range", {json_fixed(range.first, 2), json_fixed(range.second, 2)}},
+                     {"statuses", statuses},
+                     {"status_counts", status_counts},
+                     {"worst", labelled},
+                     {"lines", lines}};
+  return json_text(view, -1);
 }
 
 }  // namespace

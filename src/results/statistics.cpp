@@ -4,17 +4,18 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <sstream>
 #include <stdexcept>
 #include <vector>
 
-#include "probecomp/io/format.hpp"
+#include "probecomp/io/json.hpp"
 #include "probecomp/io/text.hpp"
 
 namespace probecomp::results {
 
+using io::Json;
+using io::json_fixed;
 using io::json_number;
-using io::json_string;
+using io::json_text;
 using io::parse_number;
 using io::trim;
 
@@ -80,89 +81,114 @@ DeviationSummaries summarise_deviations(const compensation::CompensationResult& 
 std::string statistics_json(const compensation::CompensationResult& r, const RunInputs& inputs,
                             const FileTimings& files, const std::optional<Tolerance>& tolerance) {
   const DeviationSummaries dev = summarise_deviations(r, tolerance);
-  std::ostringstream j;
-  const Eigen::Matrix4d M = r.registration.transform.matrix();
-  j << "{\"method\": \"" << compensation::to_string(r.method) << "\", \"units\": \"mm\",\n \"inputs\": {\"cad\": "
-    << json_string(inputs.cad) << ", \"points\": " << json_string(inputs.points) << ", \"points_unit\": \""
-    << inputs.points_unit.name << "\", \"probe_radius\": "
-    << (inputs.probe_radius ? json_number("%.9g", *inputs.probe_radius) : std::string("null")) << ", \"tip_radii\": [";
-  for (std::size_t k = 0; k < inputs.tip_radii.size(); ++k) j << (k ? ", " : "") << json_number("%.9g", inputs.tip_radii[k]);
-  j << "]},\n \"transform\": [";
-  for (int a = 0; a < 4; ++a) {
-    j << (a ? ",\n               [" : "[");
-    for (int b = 0; b < 4; ++b) j << (b ? ", " : "") << json_number("%.15g", M(a, b));
-    j << "]";
-  }
-  j << "],\n \"registration\": {\"converged\": " << (r.registration.converged() ? "true" : "false") << ", \"status\": \""
-    << registration::to_string(r.registration.status) << "\", \"stop_reason\": " << json_string(r.registration.stop_reason)
-    << ", \"rms\": " << json_number("%.9g", r.registration.rms)
-    << ", \"iterations\": " << r.registration.iterations + r.registration.coarse_iterations
-    << ", \"searches\": " << r.registration.searches
-    << ", \"scale\": " << json_number("%.9g", r.registration.scale) << ", \"inliers\": " << r.registration.inliers
-    << ", \"starts\": " << r.registration.starts << ", \"left_out\": " << r.registration.left_out
-    << ", \"free_motions\": [";
-  // Machine frame, as the transform maps to: the motions the data do not fix, held at the start.
-  // Appended piecewise: GCC 12 flags `"[" + std::string` with a false -Wrestrict.
-  const auto vec = [](const Vector3& v) {
-    std::string s = "[";
-    s += json_number("%.9g", v.x()) + ", " + json_number("%.9g", v.y()) + ", " + json_number("%.9g", v.z()) + "]";
-    return s;
+  const auto number = [](double v) { return json_number(v, 9); };
+  const auto vec = [&](const Vector3& v) { return Json::array({number(v.x()), number(v.y()), number(v.z())}); };
+  const auto counts = [](const auto& by_status) {
+    Json c = Json::object();
+    for (std::size_t k = 0; k < std::size(compensation::kPointStatuses); ++k) {
+      c[compensation::to_string(compensation::kPointStatuses[k])] = by_status[k];
+    }
+    return c;
   };
-  for (std::size_t k = 0; k < r.registration.constraints.free.size(); ++k) {
-    const registration::FreeMotion& f = r.registration.constraints.free[k];
-    const bool rotation = f.kind == registration::FreeMotion::Kind::Rotation;
-    j << (k ? ", " : "") << "{\"kind\": \"" << (rotation ? "rotation" : "translation") << "\", \""
-      << (rotation ? "axis" : "direction") << "\": " << vec(r.registration.transform.linear() * f.direction);
-    if (rotation) j << ", \"through\": " << vec(r.registration.transform * f.through);
-    j << "}";
+  const auto deviation = [&](const DeviationSummary& d) {
+    Json j = {{"points", d.points}, {"mean", number(d.mean)}, {"std", number(d.std)}, {"min", number(d.min)},
+              {"max", number(d.max)}};
+    if (tolerance) j["out_of_tolerance"] = d.out_of_tolerance;
+    return j;
+  };
+
+  Json j;
+  j["method"] = compensation::to_string(r.method);
+  j["units"] = "mm";
+  Json radii = Json::array();
+  for (double t : inputs.tip_radii) radii.push_back(number(t));
+  j["inputs"] = {{"cad", inputs.cad},
+                 {"points", inputs.points},
+                 {"points_unit", inputs.points_unit.name},
+                 {"probe_radius", inputs.probe_radius ? number(*inputs.probe_radius) : Json(nullptr)},
+                 {"tip_radii", radii}};
+  const Eigen::Matrix4d M = r.registration.transform.matrix();
+  Json transform = Json::array();
+  for (int a = 0; a < 4; ++a) {
+    transform.push_back(Json::array());
+    for (int b = 0; b < 4; ++b) transform.back().push_back(json_number(M(a, b), 15));
   }
-  j << "]},\n \"faces\": [";
+  j["transform"] = transform;
+
+  const registration::RegistrationResult& reg = r.registration;
+  // Machine frame, as the transform maps to: the motions the data do not fix, held at the start.
+  Json free = Json::array();
+  for (const registration::FreeMotion& f : reg.constraints.free) {
+    const bool rotation = f.kind == registration::FreeMotion::Kind::Rotation;
+    Json m = {{"kind", rotation ? "rotation" : "translation"},
+              {rotation ? "axis" : "direction", vec(reg.transform.linear() * f.direction)}};
+    if (rotation) m["through"] = vec(reg.transform * f.through);
+    free.push_back(m);
+  }
+  j["registration"] = {{"converged", reg.converged()},
+                       {"status", registration::to_string(reg.status)},
+                       {"stop_reason", reg.stop_reason},
+                       {"rms", number(reg.rms)},
+                       {"iterations", reg.iterations + reg.coarse_iterations},
+                       {"searches", reg.searches},
+                       {"scale", number(reg.scale)},
+                       {"inliers", reg.inliers},
+                       {"starts", reg.starts},
+                       {"left_out", reg.left_out},
+                       {"free_motions", free}};
+
+  Json faces = Json::array();
   for (std::size_t f = 0; f < r.faces.size(); ++f) {
     const compensation::FaceReport& x = r.faces[f];
-    j << (f ? ",\n   " : "\n   ") << "{\"face\": " << x.face << ", \"points\": " << x.points
-      << ", \"fitted\": " << (x.fitted ? "true" : "false") << ", \"material_side\": \"" << cad::to_string(x.material)
-      << "\", \"mean_u\": " << json_number("%.9g", x.mean_uncertainty);
+    Json face = {{"face", x.face},
+                 {"points", x.points},
+                 {"fitted", x.fitted},
+                 {"material_side", cad::to_string(x.material)},
+                 {"mean_u", number(x.mean_uncertainty)}};
     if (x.fitted) {
-      j << ", \"control_points\": " << x.control_points << ", \"fits\": " << x.fits
-        << ", \"refinement_rounds\": " << x.rounds << ", \"rms_residual\": " << json_number("%.9g", x.rms)
-        << ", \"max_residual\": " << json_number("%.9g", x.max_residual) << ", \"noise_estimate\": " << json_number("%.9g", x.noise_sigma)
-        << ", \"effective_dof\": " << json_number("%.6g", x.effective_dof)
-        << ", \"log10_smoothing\": " << json_number("%.4g", x.log10_smoothing)
-        << ", \"outliers\": " << x.count(compensation::PointStatus::Outlier) << ", \"repeated_points\": " << x.repeated
-        << ", \"noise_reached\": " << (x.fit_status == fitting::AdaptiveFitResult::Status::OK ? "true" : "false");
+      face["control_points"] = x.control_points;
+      face["fits"] = x.fits;
+      face["refinement_rounds"] = x.rounds;
+      face["rms_residual"] = number(x.rms);
+      face["max_residual"] = number(x.max_residual);
+      face["noise_estimate"] = number(x.noise_sigma);
+      face["effective_dof"] = json_number(x.effective_dof, 6);
+      face["log10_smoothing"] = json_number(x.log10_smoothing, 4);
+      face["outliers"] = x.count(compensation::PointStatus::Outlier);
+      face["repeated_points"] = x.repeated;
+      face["noise_reached"] = x.fit_status == fitting::AdaptiveFitResult::Status::OK;
     }
-    j << ", \"counts\": {";
-    for (std::size_t k = 0; k < std::size(compensation::kPointStatuses); ++k) {
-      j << (k ? ", " : "") << "\"" << compensation::to_string(compensation::kPointStatuses[k]) << "\": " << x.counts[k];
-    }
-    const DeviationSummary& d = dev.faces[f];
-    j << "}, \"deviation\": {\"points\": " << d.points << ", \"mean\": " << json_number("%.9g", d.mean) << ", \"std\": "
-      << json_number("%.9g", d.std) << ", \"min\": " << json_number("%.9g", d.min) << ", \"max\": " << json_number("%.9g", d.max);
-    if (tolerance) j << ", \"out_of_tolerance\": " << d.out_of_tolerance;
-    j << "}, \"stop_reason\": " << json_string(x.stop_reason) << "}";
+    face["counts"] = counts(x.counts);
+    face["deviation"] = deviation(dev.faces[f]);
+    face["stop_reason"] = x.stop_reason;
+    faces.push_back(face);
   }
-  j << "],\n \"counts\": {";
+  j["faces"] = faces;
+
   const compensation::Statistics& st = r.statistics;
-  for (std::size_t s = 0; s < std::size(compensation::kPointStatuses); ++s) {
-    j << (s ? ", " : "") << "\"" << compensation::to_string(compensation::kPointStatuses[s]) << "\": " << st.counts[s];
-  }
-  j << ", \"total\": " << st.total << "},\n \"deviation\": {\"points\": " << st.count(compensation::PointStatus::Ok)
-    << ", \"mean\": " << json_number("%.9g", st.deviation_mean) << ", \"std\": " << json_number("%.9g", st.deviation_std)
-    << ", \"min\": " << json_number("%.9g", st.deviation_min) << ", \"max\": " << json_number("%.9g", st.deviation_max);
+  j["counts"] = counts(st.counts);
+  j["counts"]["total"] = st.total;
+  Json all = {{"points", st.count(compensation::PointStatus::Ok)},
+              {"mean", number(st.deviation_mean)},
+              {"std", number(st.deviation_std)},
+              {"min", number(st.deviation_min)},
+              {"max", number(st.deviation_max)}};
   if (tolerance) {
-    j << ", \"tolerance\": [" << json_number("%.9g", tolerance->lower) << ", " << json_number("%.9g", tolerance->upper)
-      << "], \"out_of_tolerance\": " << dev.all.out_of_tolerance;
+    all["tolerance"] = {number(tolerance->lower), number(tolerance->upper)};
+    all["out_of_tolerance"] = dev.all.out_of_tolerance;
   }
-  j << "}";
-  j << ",\n \"warnings\": [";
-  for (std::size_t w = 0; w < r.warnings.size(); ++w) j << (w ? ", " : "") << json_string(r.warnings[w]);
-  j << "]";
+  j["deviation"] = all;
+  j["warnings"] = r.warnings;
   const compensation::Timings& t = r.seconds;
-  j << ",\n \"timings\": {\"read\": " << json_number("%.4f", files.read) << ", \"prepare\": " << json_number("%.4f", t.prepare)
-    << ", \"register\": " << json_number("%.4f", t.registration) << ", \"fit\": " << json_number("%.4f", t.fitting)
-    << ", \"compensate\": " << json_number("%.4f", t.compensation) << ", \"write\": " << json_number("%.4f", files.write)
-    << ", \"total\": " << json_number("%.4f", files.total) << "}}\n";
-  return j.str();
+  const auto seconds = [](double v) { return json_fixed(v, 4); };
+  j["timings"] = {{"read", seconds(files.read)},
+                  {"prepare", seconds(t.prepare)},
+                  {"register", seconds(t.registration)},
+                  {"fit", seconds(t.fitting)},
+                  {"compensate", seconds(t.compensation)},
+                  {"write", seconds(files.write)},
+                  {"total", seconds(files.total)}};
+  return json_text(j);
 }
 
 }  // namespace probecomp::results

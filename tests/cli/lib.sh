@@ -17,3 +17,20 @@ expect_error() {
 check() { if ! eval "$1"; then echo "FAIL: $2"; fail=1; fi; }
 # status_of command...: the command's exit status, its output discarded.
 status_of() { "$@" >/dev/null 2>&1; echo $?; }
+# json_check FILE CONDITION DESCRIPTION: CONDITION, a Python expression over the file's parsed JSON `j` (e.g.
+# "j['registration']['starts'] == 1"), holds; else prints "FAIL: DESCRIPTION", sets fail=1 and returns 1. A file that is not
+# JSON fails too.
+json_check() {
+  if ! python3 -c 'import json, sys; j = json.load(open(sys.argv[1])); sys.exit(0 if eval(sys.argv[2]) else 1)' "$1" "$2"; then
+    echo "FAIL: $3"; fail=1; return 1
+  fi
+}
+# json_value FILE EXPRESSION: the Python EXPRESSION over the parsed JSON `j`, printed as JSON (0.25, true, "ok").
+json_value() { python3 -c 'import json, sys; j = json.load(open(sys.argv[1])); print(json.dumps(eval(sys.argv[2])))' "$1" "$2"; }
+# html_has_cell FILE NUMBER: FILE has a table cell <td>X</td> whose number X is NUMBER (compared as numbers: the
+# table and the JSON may write one value with different digits, 1.5e-06 and 1.500000e-06).
+html_has_cell() {
+  python3 -c 'import re, sys
+v = float(sys.argv[2])
+sys.exit(0 if any(float(c) == v for c in re.findall(r"<td>([-+0-9.eE]+)</td>", open(sys.argv[1]).read())) else 1)' "$1" "$2"
+}

@@ -106,7 +106,7 @@ check "grep -q 'name=\"probecomp:status\" value=\"ok ok ' '$W/out.qif' && grep -
 "$P" compensate --cad "$W/demo/nominal.igs" --points "$W/raw.qif" --output "$W/out_qif.csv" --quiet || fail=1
 "$P" compensate --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/out_csv.csv" --quiet || fail=1
 check "[ \"\$(cut -d, -f1-10 '$W/out_qif.csv')\" = \"\$(cat '$W/out_csv.csv')\" ]" "compensated from QIF: the CSV run's figures, row for row"
-check "grep -q '\"tip_radii\": \[1\]' '$W/out.json'" "compensated from QIF: the radius from ProbeRadius"
+json_check "$W/out.json" "j['inputs']['tip_radii'] == [1]" "compensated from QIF: the radius from ProbeRadius"
 
 # Bad inputs: one line naming the file and the line, a non-zero exit, no output.
 printf 'x,y,z\n1,2,3\n' >"$W/notxml.qif"

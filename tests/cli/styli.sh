@@ -44,7 +44,8 @@ check_result "awk -v rows=$rows '\$1 == \"ok:\" { ok = 1; if (\$2 < 0.99 * rows 
 check "head -1 '$W/mixed_out.csv' | grep -q '^x,y,z,nx,ny,nz,deviation,u,face,status,r,point\$'" "the output has column r"
 check "awk -F, 'NR > 1 { n[\$11]++ } END { exit !(n[\"1.000000000\"] > 100 && n[\"0.500000000\"] > 100) }' '$W/mixed_out.csv'" \
   "each output row keeps its own radius"
-check "grep -q '\"probe_radius\": null, \"tip_radii\": \\[0.5, 1\\]' '$W/mixed.json'" "the JSON names both radii and no default"
+json_check "$W/mixed.json" "j['inputs']['probe_radius'] is None and j['inputs']['tip_radii'] == [0.5, 1]" \
+  "the JSON names both radii and no default"
 
 # QIF in -> compensate -> QIF out on the same case: the file converted to QIF 3.0 (per-point ProbeRadii), compensated
 # without --probe-radius to QIF and to CSV. The same figures as from CSV; the QIF output validates against the QIF 3.0

@@ -89,23 +89,4 @@ inline std::string fixed(double v, int precision) {
 inline std::string mm(double v) { return fixed(v, 9); }
 inline std::string unit(double v) { return fixed(v, 12); }
 
-// A number for a JSON file: JSON has no NaN nor infinity (printf's "nan" or "inf" would make the whole file
-// unreadable to a JSON parser), so a value that is not finite is written null.
-inline std::string json_number(const char* format, double value) {
-  return std::isfinite(value) ? fmt(format, value) : std::string("null");
-}
-
-inline std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      out += fmt("\\u%04x", static_cast<unsigned char>(c));
-      continue;
-    }
-    out += c;
-  }
-  return out + "\"";
-}
-
 }  // namespace probecomp::io
