@@ -10,8 +10,11 @@ build_dir=build
 flags=(-DCMAKE_BUILD_TYPE=Release)
 if [ "${1:-}" = "--sanitize" ]; then
   build_dir=build-sanitize
-  # No Python package: the interpreter would have to preload the sanitizers' runtime to load it.
-  flags=(-DCMAKE_BUILD_TYPE=Debug -DPROBECOMP_SANITIZE=ON -DPROBECOMP_BUILD_BENCH=OFF -DPROBECOMP_BUILD_PYTHON=OFF)
+  # No Python package: the interpreter would have to preload the sanitizers' runtime to load it. A unity build
+  # (each target's sources compiled in batches): it halves this build's time, and CI must stay within 30 minutes;
+  # the Release build compiles every file on its own, so each still includes what it uses.
+  flags=(-DCMAKE_BUILD_TYPE=Debug -DPROBECOMP_SANITIZE=ON -DPROBECOMP_BUILD_BENCH=OFF -DPROBECOMP_BUILD_PYTHON=OFF
+         -DCMAKE_UNITY_BUILD=ON)
   # Stop at the first report, leaks included.
   export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}"
   export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp:print_suppressions=0}"

@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "probecomp/nurbs/basis.hpp"
+#include "assembly.hpp"
 #include "rational_basis.hpp"
 
 namespace probecomp::fitting {
@@ -21,6 +22,9 @@ using SparseMatrix = Eigen::SparseMatrix<double>;
 
 using detail::RationalBasis;
 using detail::rational_basis;
+using detail::inside;
+using detail::kChunkMemoryBytes;
+using detail::kChunkPoints;
 
 // AᵀWA of the data in band form: entry (I, J) with I = (i, j), J = (i + di, j + dj), |di| ≤ p, |dj| ≤ q, at
 // band[I·B + (di + p)·(2q + 1) + (dj + q)], B = (2p + 1)(2q + 1). Every row of A has its (p+1)(q+1) non-zeros
@@ -101,16 +105,6 @@ SparseMatrix bending(int nu, int nv) {
   D.setFromTriplets(t.begin(), t.end());
   return SparseMatrix(D.transpose() * D);
 }
-
-bool inside(const nurbs::Domain& d, const SurfaceParameter& t) {
-  return t.u >= d.u0 && t.u <= d.u1 && t.v >= d.v0 && t.v <= d.v1;
-}
-
-// Points per assembly chunk. Chunks are fixed by the number of points alone and summed in order, so the sums
-// (and the fit) do not depend on how many threads ran them.
-constexpr std::size_t kChunkPoints = 16384;
-// Memory cap for the chunks' private normal matrices.
-constexpr std::size_t kChunkMemoryBytes = std::size_t{64} << 20;
 
 }  // namespace
 

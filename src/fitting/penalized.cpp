@@ -11,6 +11,7 @@
 #include <limits>
 #include <numeric>
 
+#include "assembly.hpp"
 #include "band.hpp"
 #include "penalty.hpp"
 #include "rational_basis.hpp"
@@ -28,19 +29,13 @@ using detail::Ordering;
 using detail::ThinPlateTerms;
 using detail::band_inverse;
 using detail::block_quadratic_form;
+using detail::inside;
+using detail::kChunkMemoryBytes;
+using detail::kChunkPoints;
 using detail::cholesky;
 using detail::gather_block;
 using detail::solve;
 using detail::thin_plate_energy;
-
-bool inside(const nurbs::Domain& d, const SurfaceParameter& t) {
-  return t.u >= d.u0 && t.u <= d.u1 && t.v >= d.v0 && t.v <= d.v1;
-}
-
-// Points per assembly chunk: chunks are fixed by the number of points alone and summed in order, so the sums (and
-// the fit) do not depend on the thread count.
-constexpr std::size_t kChunkPoints = 16384;
-constexpr std::size_t kChunkMemoryBytes = std::size_t{64} << 20;
 
 // The unknown each of rb's basis functions multiplies, in idx.
 void row_unknowns(const Surface& s, const Ordering& order, const RationalBasis& rb, int* idx) {

@@ -5,10 +5,6 @@
 
 namespace probecomp::geometry {
 
-namespace {
-constexpr double kDegree = std::numbers::pi / 180.0;
-}
-
 RigidTransform from_twist(const Twist& xi) {
   const Vector3 w = xi.head<3>();
   const double angle = w.norm();

@@ -13,8 +13,6 @@ namespace probecomp::simulation {
 
 namespace {
 
-constexpr double kDegree = std::numbers::pi / 180.0;
-
 // 8 × 7 control points over 80 × 70 mm on non-uniform knots, weights 1: a crown of 8 mm, a cross wave of 1.5 mm and
 // a twist, curvature radii above 50 mm; a different parametrisation, size and shape from the paper's panel.
 nurbs::Surface hood_surface() {

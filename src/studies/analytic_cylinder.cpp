@@ -5,12 +5,12 @@
 #include <stdexcept>
 
 #include "probecomp/error.hpp"
+#include "probecomp/geometry/types.hpp"
 
 namespace probecomp::studies {
 
 namespace {
 
-constexpr double kDegree = std::numbers::pi / 180.0;
 constexpr double kSampleStepDeg = 0.01;
 constexpr double kAngleToleranceDeg = 1e-9;
 

@@ -10,7 +10,6 @@ namespace probecomp::studies {
 
 namespace {
 
-constexpr double kDegree = std::numbers::pi / 180.0;
 // "Smoothing removes noise" is claimed where the noise dominates the fit's own error: from σ = 10 µm.
 constexpr double kSmoothingClaimFromSigma = 0.010;
 

@@ -18,12 +18,13 @@
 #include "probecomp/cad/model.hpp"
 #include "probecomp/cad/offset_model.hpp"
 #include "probecomp/nurbs/constructors.hpp"
+#include "support/data_files.hpp"
 #include "support/occt_files.hpp"
 
 namespace probecomp::cad {
 namespace {
 
-const std::filesystem::path kCadDir = PROBECOMP_TEST_CAD_DIR;
+using test::kCadDir;
 constexpr double kPi = std::numbers::pi;
 
 // Random points within `reach` of the surface's control-net box, and some far off.

@@ -19,6 +19,7 @@
 #include "probecomp/cad/locator.hpp"
 #include "probecomp/cad/plan.hpp"
 #include "probecomp/compensation/pipeline.hpp"
+#include "support/data_files.hpp"
 #include "support/occt_files.hpp"
 
 namespace probecomp::cad {
@@ -31,7 +32,7 @@ static_assert(!std::is_constructible_v<ModelLocator, Model>);
 static_assert(!std::is_constructible_v<TrimmedFaceLocator, Face&&>);
 static_assert(!std::is_copy_constructible_v<compensation::PreparedModel>);
 
-const std::filesystem::path kCadDir = PROBECOMP_TEST_CAD_DIR;
+using test::kCadDir;
 
 // Points around the model: planned points pushed off along the normal by up to ±3 mm and sideways by up to
 // 2 mm, so that many feet land on trim edges and on neighbouring faces.

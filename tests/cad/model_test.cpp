@@ -13,11 +13,12 @@
 #include "probecomp/occt/convert.hpp"
 #include "support/occt_files.hpp"
 #include "support/test_surfaces.hpp"
+#include "support/data_files.hpp"
 
 namespace probecomp::cad {
 namespace {
 
-const std::filesystem::path kCadDir = PROBECOMP_TEST_CAD_DIR;
+using test::kCadDir;
 
 struct CadFile {
   const char* name;

@@ -8,11 +8,12 @@
 #include <random>
 
 #include "probecomp/cad/locator.hpp"
+#include "support/data_files.hpp"
 
 namespace probecomp::cad {
 namespace {
 
-const std::filesystem::path kCadDir = PROBECOMP_TEST_CAD_DIR;
+using test::kCadDir;
 
 class OffsetCadFile : public ::testing::TestWithParam<const char*> {};
 

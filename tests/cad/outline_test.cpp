@@ -8,11 +8,12 @@
 #include <filesystem>
 
 #include "probecomp/nurbs/constructors.hpp"
+#include "support/data_files.hpp"
 
 namespace probecomp::cad {
 namespace {
 
-const std::filesystem::path kCadDir = PROBECOMP_TEST_CAD_DIR;
+using test::kCadDir;
 
 TEST(FaceOutline, APlanePatchHasItsFourSidesAndItsIsolines) {
   const Face face{.index = 0, .name = "", .source_type = "plane",

@@ -122,6 +122,9 @@ TEST(Pipeline, ASteepDentWithoutNoiseKeepsEveryRow) {
   studies::FreeformStudyOptions o;
   o.steep_dent = true;
   o.noise_sigma = 0.0;
+  // The sanitizer build takes this path with TwoStyliWithoutNoiseAreExactOnASteepDent, the same dent and grid at a
+  // quarter of the time (86 s here, the longest test there).
+  if (test::kLight) GTEST_SKIP() << "light build: TwoStyliWithoutNoiseAreExactOnASteepDent runs the same path";
   expect_low_noise_bars(o, 0.002);
 }
 
@@ -575,9 +578,9 @@ AgainstTruth against_truth(const compensation::CompensationResult& r, const cad:
 // followed (a contact 114 µm from the true part).
 TEST(Pipeline, GrossOutliersAtLowAndHighNoise) {
   const PaperPanel panel(120, 60);
-  for (const double sigma : {0.0005, 0.0045}) {
+  for (const double sigma : test::cases({0.0005, 0.0045})) {
     for (const std::uint64_t seed : test::cases<std::uint64_t>({1u, 2u, 3u})) {
-      SCOPED_TRACE(testing::Message() << "sigma " << sigma << " seed " << seed);
+      SCOPED_TRACE(::testing::Message() << "sigma " << sigma << " seed " << seed);
       std::vector<Point3> points = panel.centres(sigma, seed);
       const std::vector<char> moved = move_one_percent(points, panel.plan, seed);
       const AgainstTruth t = against_truth(compensation::compensate(panel.c.nominal, points, std::nullopt, panel.options),
@@ -622,10 +625,10 @@ TEST(Pipeline, UnfollowedShapeAtLowNoiseIsNotPeeledOff) {
 // holds its residual (a prediction error). Measured: 1.93, 2.34, 2.51 u (60 × 30) and 1.28, 1.39, 0.99 u (120 × 60);
 // 17.2 u, and 814 and 4 358 u, before.
 TEST(Pipeline, NoiseFreeDataWithGrossOutliersStateEveryErrorWithinItsU) {
-  for (const int nu : test::cases({120, 60})) {
+  for (const int nu : test::cases({60, 120})) {
     const PaperPanel panel(nu, nu / 2);
     for (const std::uint64_t seed : test::cases<std::uint64_t>({1u, 2u, 3u})) {
-      SCOPED_TRACE(testing::Message() << nu << " x " << nu / 2 << " seed " << seed);
+      SCOPED_TRACE(::testing::Message() << nu << " x " << nu / 2 << " seed " << seed);
       std::vector<Point3> points = panel.centres(0.0, seed);
       const std::vector<char> moved = move_one_percent(points, panel.plan, seed);
       const compensation::CompensationResult r = compensation::compensate(panel.c.nominal, points, std::nullopt, panel.options);

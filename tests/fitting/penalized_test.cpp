@@ -23,7 +23,7 @@ using testing::perturbed;
 using Samples = testing::SurfaceSamples;
 
 // n points at uniform random parameters, moved by Gaussian noise of standard deviation sigma in each coordinate.
-Samples sample(const Surface& s, std::size_t n, double sigma, std::uint64_t seed) {
+Samples isotropic_sample(const Surface& s, std::size_t n, double sigma, std::uint64_t seed) {
   return testing::sample_surface(s, n, sigma, seed, testing::Noise::Isotropic);
 }
 
@@ -33,7 +33,7 @@ double worst_gap(const Surface& a, const Surface& b) { return testing::surface_d
 TEST(FitPenalized, ExactDataFromASurfaceWithTheSameKnotsAreFollowedToASmallFractionOfAMicrometre) {
   const Surface truth = testing::random_rational_surface(3, {.nu = 8, .nv = 7});
   const Surface start = perturbed(truth, 0.5, 4);
-  const Samples data = sample(truth, 3000, 0.0, 5);
+  const Samples data = isotropic_sample(truth, 3000, 0.0, 5);
   const PenalizedFitResult fit = fit_penalized(start, data.points, data.params);
   ASSERT_TRUE(fit.ok());
   // Cross-validation on exact data wants almost no smoothing.
@@ -43,7 +43,7 @@ TEST(FitPenalized, ExactDataFromASurfaceWithTheSameKnotsAreFollowedToASmallFract
 
 TEST(FitPenalized, TheHatDiagonalIsTheFitsResponseToItsOwnDataPoint) {
   const Surface truth = testing::random_rational_surface(7, {.nu = 7, .nv = 6});
-  Samples data = sample(truth, 400, 0.01, 8);
+  Samples data = isotropic_sample(truth, 400, 0.01, 8);
   PenalizedFitOptions o;
   o.log10_smoothing = -3.0;  // one fixed λ: the fit is then linear in the data
   const PenalizedFitResult base = fit_penalized(truth, data.points, data.params, {}, o);
@@ -68,7 +68,7 @@ TEST(FitPenalized, TheHatDiagonalIsTheFitsResponseToItsOwnDataPoint) {
 TEST(FitPenalized, TheResidualsLeaveTheNoisePutIn) {
   const Surface truth = testing::random_rational_surface(9, {.nu = 9, .nv = 9});
   constexpr double sigma = 0.004;
-  const Samples data = sample(truth, 5000, sigma, 10);
+  const Samples data = isotropic_sample(truth, 5000, sigma, 10);
   const PenalizedFitResult fit = fit_penalized(truth, data.points, data.params);
   ASSERT_TRUE(fit.ok());
   // Wahba's estimate: RSS / (n − tr H) per coordinate.
@@ -149,7 +149,7 @@ TEST(FitPenalized, AWaveAlongOneDirectionIsFollowedBetterWithTheAnisotropyCrossV
 TEST(FitPenalized, BadInputIsNotDone) {
   const Surface s = testing::random_rational_surface(1, {.nu = 5, .nv = 5});
   EXPECT_EQ(fit_penalized(s, {}, {}).status, PenalizedFitResult::Status::NotDone);
-  Samples data = sample(s, 50, 0.0, 2);
+  Samples data = isotropic_sample(s, 50, 0.0, 2);
   data.params[3].u = 2.0;  // outside the domain
   EXPECT_EQ(fit_penalized(s, data.points, data.params).status, PenalizedFitResult::Status::NotDone);
 }

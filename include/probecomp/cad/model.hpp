@@ -18,11 +18,11 @@ namespace probecomp::cad {
 
 struct Face {
   int index = 0;            // position in the file's face order (OpenCASCADE's), from 0
-  std::string name;         // the face's name in the file; empty when it has none
-  std::string source_type;  // the surface as the file describes it: plane, cylinder, bspline, ...
+  std::string name{};       // the face's name in the file; empty when it has none
+  std::string source_type{};  // the surface as the file describes it: plane, cylinder, bspline, ...
   nurbs::Surface surface;
   // Empty when the face is its whole surface. Held by pointer so that a solver can keep referring to it.
-  std::shared_ptr<const Trim> trim;
+  std::shared_ptr<const Trim> trim{};
   int outward = 1;              // +1: the outward normal (away from the material) is S_u × S_v; −1: opposite
   bool material_known = false;  // the face bounds a solid, so `outward` is the material side for certain
   // The NURBS is the file's surface exactly (B-spline, Bézier and analytic faces); offset and other procedural

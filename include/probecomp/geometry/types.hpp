@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>  // cross products
 #include <limits>
+#include <numbers>
 
 namespace probecomp {
 
@@ -11,6 +12,9 @@ using Point3 = Eigen::Vector3d;
 using Vector3 = Eigen::Vector3d;
 // A control point in homogeneous form (w·x, w·y, w·z, w): NURBS are B-splines in this space.
 using HomogeneousPoint = Eigen::Vector4d;
+
+// One degree in radians: angles are given in degrees (poses, arcs, the shapes' directions), computed in radians.
+inline constexpr double kDegree = std::numbers::pi / 180.0;
 
 struct BoundingBox {
   Point3 min = Point3::Constant(std::numeric_limits<double>::infinity());

@@ -40,7 +40,7 @@ struct SimulatedMeasurement {
 
 struct ComparisonOptions {
   bool approach_normals = true;  // false: the CAD method runs without i,j,k (the conventional one needs them)
-  compensation::CompensateOptions compensate;  // method and probe radius are set by the comparison
+  compensation::CompensateOptions compensate{};  // method and probe radius are set by the comparison
 };
 
 struct MethodComparison {
