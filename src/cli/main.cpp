@@ -94,12 +94,12 @@ int run_info(const std::string& part, bool json) {
   }
   std::ostringstream out;
   if (json) {
+    const auto corner = [](const Point3& p) {
+      return io::Json::array({io::json_fixed(p.x(), 9), io::json_fixed(p.y(), 9), io::json_fixed(p.z(), 9)});
+    };
     io::Json faces = io::Json::array();
     for (const cad::Face& f : model.faces) {
       const BoundingBox b = nurbs::bounding_box(f.surface);
-      const auto corner = [](const Point3& p) {
-        return io::Json::array({io::json_fixed(p.x(), 9), io::json_fixed(p.y(), 9), io::json_fixed(p.z(), 9)});
-      };
       faces.push_back({{"index", f.index},
                        {"name", f.name},
                        {"type", f.source_type},

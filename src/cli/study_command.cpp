@@ -149,6 +149,8 @@ std::string paper_number(double v) { return fmt("%g", v); }
 io::Json length(double mm) { return io::json_fixed(mm, 9); }
 // A figure given to a few significant digits (a noise level, a peak, a ratio: %g).
 io::Json figure(double v) { return io::json_number(v, 6); }
+// A share (a coverage) to 1e-4, as in the studies' CSV.
+io::Json share(double v) { return io::json_fixed(v, 4); }
 
 io::Json json_summary(const studies::ErrorSummary& s) {
   return {{"points", s.points}, {"std", length(s.std)}, {"mean", length(s.mean)}, {"min", length(s.min)},
@@ -574,8 +576,8 @@ int run_study_freeform_noise(const StudyArgs& a) {
                     {"cad", json_summary(d)},
                     {"cad_flagged", r.flagged},
                     {"mean_u_mm", length(r.mean_uncertainty)},
-                    {"coverage_2u", io::json_fixed(r.coverage_2u, 4)},
-                    {"worst_region_coverage_2u", io::json_fixed(r.worst_region_coverage_2u, 4)}});
+                    {"coverage_2u", share(r.coverage_2u)},
+                    {"worst_region_coverage_2u", share(r.worst_region_coverage_2u)}});
   }
   t << fmt("%.2f", t0.seconds()) << " s\n";
   std::cout << t.str();
@@ -630,8 +632,8 @@ int run_study_freeform(const StudyArgs& a) {
                       {"cad", json_summary(r.cad_summary)},
                       {"cad_uncertainty",
                        {{"mean_u_mm", length(r.mean_uncertainty)},
-                        {"coverage_2u", io::json_fixed(r.coverage_2u, 4)},
-                        {"worst_region_coverage_2u", io::json_fixed(r.worst_region_coverage_2u, 4)},
+                        {"coverage_2u", share(r.coverage_2u)},
+                        {"worst_region_coverage_2u", share(r.worst_region_coverage_2u)},
                         {"flagged", r.flagged}}},
                       {"paper", {{"conventional", json_summary(paper.conventional)}, {"cad", json_summary(paper.proposed)}}}};
 

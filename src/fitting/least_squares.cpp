@@ -23,8 +23,7 @@ using SparseMatrix = Eigen::SparseMatrix<double>;
 using detail::RationalBasis;
 using detail::rational_basis;
 using detail::inside;
-using detail::kChunkMemoryBytes;
-using detail::kChunkPoints;
+using detail::chunk_count;
 
 // AᵀWA of the data in band form: entry (I, J) with I = (i, j), J = (i + di, j + dj), |di| ≤ p, |dj| ≤ q, at
 // band[I·B + (di + p)·(2q + 1) + (dj + q)], B = (2p + 1)(2q + 1). Every row of A has its (p+1)(q+1) non-zeros
@@ -141,8 +140,7 @@ FitResult fit_control_points(const Surface& start, std::span<const Point3> point
   // Assembly, in fixed chunks.
   const NormalEquations empty(start);
   const std::size_t chunk_bytes = empty.band.size() * sizeof(double) + static_cast<std::size_t>(n) * 3 * sizeof(double);
-  const std::size_t max_chunks = std::max<std::size_t>(1, kChunkMemoryBytes / std::max<std::size_t>(chunk_bytes, 1));
-  const std::size_t chunks = std::clamp<std::size_t>((n_points + kChunkPoints - 1) / kChunkPoints, 1, max_chunks);
+  const std::size_t chunks = chunk_count(n_points, chunk_bytes);
   std::vector<NormalEquations> parts(chunks, empty);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
     const std::size_t first = n_points * c / chunks;

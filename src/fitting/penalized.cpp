@@ -30,8 +30,7 @@ using detail::ThinPlateTerms;
 using detail::band_inverse;
 using detail::block_quadratic_form;
 using detail::inside;
-using detail::kChunkMemoryBytes;
-using detail::kChunkPoints;
+using detail::chunk_count;
 using detail::cholesky;
 using detail::gather_block;
 using detail::solve;
@@ -112,8 +111,7 @@ DataTerms assemble_data(const Surface& s, std::span<const Point3> net, const Ord
   const int p = s.p(), q = s.q();
   const std::size_t n_points = points.size();
   const std::size_t bytes = static_cast<std::size_t>(n) * (b + 4) * sizeof(double);
-  const std::size_t max_chunks = std::max<std::size_t>(1, kChunkMemoryBytes / std::max<std::size_t>(bytes, 1));
-  const std::size_t chunks = std::clamp<std::size_t>((n_points + kChunkPoints - 1) / kChunkPoints, 1, max_chunks);
+  const std::size_t chunks = chunk_count(n_points, bytes);
   std::vector<DataTerms> parts(chunks);
   // Consecutive points in one knot span (a scan line crosses a span in tens of points) share their unknowns:
   // their outer products are summed in a small dense block, which is added into the band once per run of them,

@@ -13,8 +13,10 @@ if [ "$LIGHT" = light ]; then FACES=0-20; else FACES=0-40; fi
 rm -rf "$W"; mkdir -p "$W"
 fail=0
 . "$(dirname "$0")/lib.sh"
-# check_result CONDITION DESCRIPTION: as check, but not in the light run.
+# check_result CONDITION DESCRIPTION and json_check_result FILE CONDITION DESCRIPTION: as check and json_check,
+# but not in the light run.
 check_result() { [ "$LIGHT" = light ] || check "$@"; }
+json_check_result() { [ "$LIGHT" = light ] || json_check "$@"; }
 SCORE="$(dirname "$0")/score.awk"
 HPDC="$CAD/asitus_repatch-hpdc.stp"
 # ok_within DIR STD_UM MAX_UM: the ok rows' error std and largest |error| (µm) within the bounds, and at least
@@ -45,11 +47,11 @@ check_result "ok_within '$W/partial' 1 5" "partial coverage: ok rows within std 
 # domain edge), edge rows had std 26 um, max 220 um here.
 check_result "rows_within '$W/partial' edge 4 12" "partial coverage: edge rows within std 4 um, max 12 um"
 check_result "rows_within '$W/partial' few-points 4 12" "partial coverage: few-points rows within std 4 um, max 12 um"
-[ "$LIGHT" = light ] || json_check "$W/partial/out.json" "j['registration']['starts'] == 1" "partial coverage: registered from the given start"
+json_check_result "$W/partial/out.json" "j['registration']['starts'] == 1" "partial coverage: registered from the given start"
 # Faces too small for their points' control net say so, with what they would need (issue 20, item 5).
 check_result "grep -q 'warning: [0-9]* faces with points were not fitted; .*: face [0-9]*, [0-9]* points off the edges for [0-9]* control points ([0-9]* needed)' '$W/partial/err'" \
   "partial coverage: unfitted faces and why on standard error"
-[ "$LIGHT" = light ] || json_check "$W/partial/out.json" \
+json_check_result "$W/partial/out.json" \
   "any(not f['fitted'] and f['counts']['ok'] == 0 and f['counts']['outlier'] == 0 and f['counts']['few-points'] > 0 and f['stop_reason'].startswith('not fitted: ') and 'points off the edges for' in f['stop_reason'] for f in j['faces'])" \
   "partial coverage: an unfitted face's counts by status and its reason in the JSON"
 
@@ -67,7 +69,7 @@ check_result "rows_within '$W/stylus3' few-points 4 12" "3 mm stylus: few-points
 # The part is rigid, so a double contact's true deviation is zero on either face it touches.
 check_result "awk -F, 'NR > 1 && \$10 == \"double-contact\" { n++; d = \$7 < 0 ? -\$7 : \$7; if (d > 0.005) bad = 1 } END { exit !(n >= 1 && !bad) }' '$W/stylus3/out.csv'" \
   "3 mm stylus: double-contact rows found, their deviations within 5 um of zero"
-[ "$LIGHT" = light ] || json_check "$W/stylus3/out.json" "j['counts']['double-contact'] > 0" "3 mm stylus: double-contact in the JSON's counts"
+json_check_result "$W/stylus3/out.json" "j['counts']['double-contact'] > 0" "3 mm stylus: double-contact in the JSON's counts"
 
 # 2. 1 mm and 10° off: ICP alone lands on the wrong side of the walls (29 % of the points r/2 inside the
 # material); the coarse alignment finds the right pose, and says so.
@@ -78,7 +80,7 @@ if [ "$LIGHT" != light ]; then  # the coarse alignment runs in the light run too
   check_result "ok_within '$W/rough' 1 5" "rough alignment: ok rows within std 1 um, max 5 um"
   check_result "grep -q 'warning: the registration from the given start was not credible.*coarse alignment' '$W/rough/err'" \
     "rough alignment: the coarse alignment is reported on standard error"
-  [ "$LIGHT" = light ] || json_check "$W/rough/out.json" "j['warnings'][0].startswith('the registration from the given start was not credible')" \
+  json_check_result "$W/rough/out.json" "j['warnings'][0].startswith('the registration from the given start was not credible')" \
     "rough alignment: and in the JSON"
 fi
 
@@ -100,7 +102,7 @@ printf '# 30 degrees about x\n1 0 0 0\n0 0.8660254037844387 -0.5 0\n0, 0.5, 0.86
 "$P" compensate --cad "$HPDC" --points "$W/far/raw.csv" --probe-radius 1 --initial-transform "$W/far/T.txt" \
   --output "$W/far/out.csv" --json "$W/far/out.json" --quiet || { echo "FAIL: --initial-transform"; fail=1; }
 check_result "ok_within '$W/far' 1 5" "far with --initial-transform: ok rows within std 1 um, max 5 um"
-[ "$LIGHT" = light ] || json_check "$W/far/out.json" "abs(j['transform'][1][1] - 0.8191520) < 1e-4" \
+json_check_result "$W/far/out.json" "abs(j['transform'][1][1] - 0.8191520) < 1e-4" \
   "far: the registered rotation is 35 degrees (cos 0.8191520)"
 [ "$LIGHT" = light ] || "$P" compensate --cad "$HPDC" --points "$W/far/raw.csv" --probe-radius 1 \
   --accept-doubtful-registration --output "$W/far/accepted.csv" --quiet 2>"$W/far/accepted.err" ||

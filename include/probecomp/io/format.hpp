@@ -1,5 +1,5 @@
 #pragma once
-// Number and JSON formatting shared by the result writers and the commands: lengths with 9 decimals (nm), unit vectors with 12.
+// Number formatting shared by the result writers and the commands: lengths with 9 decimals (nm), unit vectors with 12.
 
 #include <bit>
 #include <charconv>
