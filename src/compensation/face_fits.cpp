@@ -183,13 +183,10 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     });
     // A point at an earlier point's position (a reading recorded twice: a scanner's repeated sample, a row copied)
     // is one observation: fitted once. Counted twice it would be its own nearest neighbour, so the noise estimate
-    // (differences of neighbouring residuals) would read low, the cross-validation would take the copies as
+    // (each residual against its neighbours') would read low, the cross-validation would take the copies as
     // confirming each other, and the fit would chase the noise (10 % repeated on the free-form case: 1 927
     // control points instead of 783).
-    // With each point's nearest other (the fit's noise estimate takes differences of neighbouring residuals), from
-    // the same k-d tree.
-    geometry::NearestAndFirst around = geometry::nearest_other_and_first(member_points, kSamePosition);
-    const std::vector<std::uint32_t>& first = around.first;
+    const std::vector<std::uint32_t> first = geometry::first_at_same_position(member_points, kSamePosition);
     std::vector<std::uint32_t> position(members.size());  // member → its position among the fitted points
     std::vector<Point3> pts;
     std::vector<std::uint32_t> fitted_point;  // fitted point → its input index
@@ -222,10 +219,6 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     const double needed = options.min_points_per_control_point * start.num_u() * start.num_v();
     std::optional<fitting::AdaptiveFitResult>& fit = ff.fit;
     std::vector<double> weights(pts.size(), 1.0);
-    // Each point's nearest other point, once per face for all its refits. Without repeats the fitted points are the
-    // members in order, whose nearest are at hand; with them, found again among the points kept.
-    const std::vector<std::uint32_t> nearest = rep.repeated == 0 ? std::move(around.nearest) : fitting::nearest_neighbours(pts);
-    around = {};
     std::vector<char> in_fit;  // per fitted point: 1 where the last fit used it
     // Points along a scanning probe's lines are predicted from their own line's neighbours whatever the fit does
     // between the lines: their smoothing is chosen by leaving a knot span's points out at once (penalized.hpp).
@@ -243,7 +236,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at) {
       in_fit.resize(pts.size());
       for (std::size_t j = 0; j < pts.size(); ++j) in_fit[j] = weights[j] > 0.0;
-      fit = fitting::fit_surface(from, pts, at, weights, surface, nearest);
+      fit = fitting::fit_surface(from, pts, at, weights, surface);
       ++rep.fits;
       rep.rounds += fit->rounds;
     };

@@ -2,16 +2,15 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
+#include "probecomp/fitting/noise_estimate.hpp"
 #include "probecomp/fitting/spans.hpp"
 #include "probecomp/nurbs/closest_point.hpp"
-#include "probecomp/geometry/neighbours.hpp"
 #include "probecomp/geometry/statistics.hpp"
 
 namespace probecomp::fitting {
@@ -45,10 +44,6 @@ AlongNormal along_normal(const Surface& s, std::span<const Point3> points, std::
   });
   return out;
 }
-
-// The spread of the standardised residuals above this multiple of the neighbours' differences says the fit still
-// misses shape: then the differences tell the noise.
-constexpr double kMisfitRatio = 1.25;
 
 // A neighbourhood's mean-square excess counts as bias only above the χ² quantile exceeded by noise alone with
 // this probability (see the bias estimate in fit_surface).
@@ -139,23 +134,6 @@ double LocalSpread::operator()(std::size_t k) const {
   return s < fit_.span_spread.size() ? fit_.span_spread[s] : fit_.noise_sigma;
 }
 
-std::vector<std::uint32_t> nearest_neighbours(std::span<const Point3> points) {
-  return geometry::nearest_others(points, 1);
-}
-
-double neighbour_noise_sigma(std::span<const double> residuals, std::span<const double> weights,
-                             std::span<const std::uint32_t> neighbours) {
-  std::vector<double> d;
-  d.reserve(residuals.size());
-  for (std::size_t k = 0; k < residuals.size(); ++k) {
-    const std::size_t j = neighbours[k];
-    if (j == k || (!weights.empty() && !(weights[k] > 0.0 && weights[j] > 0.0))) continue;
-    d.push_back(std::abs(residuals[k] - residuals[j]));
-  }
-  if (d.empty()) return std::numeric_limits<double>::infinity();
-  return kMadToSigma * median_in_place(d) / std::sqrt(2.0);
-}
-
 std::vector<SurfaceParameter> correct_parameters(const Surface& s, std::span<const Point3> points,
                                                  std::span<const SurfaceParameter> params) {
   std::vector<SurfaceParameter> out(params.begin(), params.end());
@@ -186,7 +164,7 @@ double robust_noise_sigma(std::span<const double> residuals, std::span<const dou
 
 AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> points,
                               std::span<const SurfaceParameter> params, std::span<const double> weights,
-                              const AdaptiveFitOptions& options, std::span<const std::uint32_t> given_neighbours) {
+                              const AdaptiveFitOptions& options) {
   AdaptiveFitResult result{.status = AdaptiveFitResult::Status::NotDone, .surface = start};
   std::vector<SurfaceParameter> t(params.begin(), params.end());
   std::size_t used = 0;
@@ -195,9 +173,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   // the last round's fit, which would make the final surface a cascade of fits whose variance the last one's
   // hat matrix does not describe).
   Surface target = start;
-  std::vector<std::uint32_t> computed;
-  if (given_neighbours.size() != points.size()) computed = nearest_neighbours(points);
-  const std::span<const std::uint32_t> neighbours = computed.empty() ? given_neighbours : std::span<const std::uint32_t>(computed);
+  const LocalPredictionNoise local_noise(points, weights);
 
   // The penalty's weight per knot span (a · V spans + b): lowered where the data show shape the fit misses, so
   // that the flexibility added there is not smoothed away by a λ that suits the rest of the face, nor spread
@@ -243,19 +219,14 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     for (std::size_t k = 0; k < points.size(); ++k) {
       standardised[k] = result.residuals[k] / std::sqrt(std::max(1.0 - leverage(k), 0.05));
     }
-    // The spread of the residuals overstates the noise while the fit still misses a shape that covers much of
-    // the face (a broad deformation): then the differences between neighbours, which that misfit barely
-    // changes, tell the noise. On noise alone the two agree; the smaller is taken.
-    {
-      // Side by side: each is a serial median (a million points: about 25 ms each).
-      double spread = 0.0, local = 0.0;
-      tbb::parallel_invoke([&] { spread = robust_noise_sigma(standardised, weights, 0); },
-                           [&] { local = neighbour_noise_sigma(standardised, weights, neighbours); });
-      // The fit makes neighbouring residuals alike, so their differences read about 10 % low on noise alone
-      // (measured on a dented panel, 62 500 points, σ = 5 µm: 4.46 µm): the spread is taken unless it is clearly
-      // above them, a misfit the fit has not yet followed.
-      result.noise_sigma = spread <= kMisfitRatio * local ? spread : local;
-    }
+    // The noise from the residuals' local prediction errors (fitting/noise_estimate.hpp), not their spread: while
+    // the fit still misses a shape the spread holds that misfit too, and the span tests below, measured against
+    // it, would not see it. (A wave 100 µm high and 8 mm long over a cylinder, σ = 4.5 µm: the spread read 8.8 µm
+    // after four rounds, the differences between nearest neighbours 6.5 µm, the local prediction 4.6 µm.) Of the
+    // standardised residuals, the scale the span tests measure against. Too few points for a local quadratic:
+    // the spread.
+    result.noise_sigma = local_noise.sigma(standardised);
+    if (!std::isfinite(result.noise_sigma)) result.noise_sigma = robust_noise_sigma(standardised, weights, 0);
     double sum = 0.0, weight_sum = 0.0;
     result.max_residual = 0.0;
     for (std::size_t k = 0; k < points.size(); ++k) {

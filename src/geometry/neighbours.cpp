@@ -249,17 +249,11 @@ std::vector<std::uint32_t> nearest_others(std::span<const Point3> points, int co
 std::vector<std::uint32_t> first_at_same_position(std::span<const Point3> points, double tolerance) {
   if (points.size() < 2) return first_at_same_position_in(nullptr, points, tolerance);
   const Forest forest(points);
-  return first_at_same_position_in(&forest, points, tolerance);
-}
-
-NearestAndFirst nearest_other_and_first(std::span<const Point3> points, double tolerance) {
-  if (points.size() < 2) return {nearest_others_in(nullptr, points, 1), first_at_same_position_in(nullptr, points, tolerance)};
-  const Forest forest(points);
   // The nearest other tells which points may repeat another: only those are searched around (a million distinct
   // points: no radius search at all).
   std::vector<char> within;
-  std::vector<std::uint32_t> nearest = nearest_others_in(&forest, points, 1, &within, tolerance);
-  return {std::move(nearest), first_at_same_position_in(&forest, points, tolerance, &within)};
+  (void)nearest_others_in(&forest, points, 1, &within, tolerance);
+  return first_at_same_position_in(&forest, points, tolerance, &within);
 }
 
 }  // namespace probecomp::geometry

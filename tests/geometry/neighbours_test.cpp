@@ -13,6 +13,11 @@
 namespace probecomp::geometry {
 namespace {
 
+// Both neighbour lists of one point set, as the tests compare them.
+struct NearestAndFirst {
+  std::vector<std::uint32_t> nearest, first;
+};
+
 TEST(NearestOthers, OnALineTheyAreTheClosestPointsOtherThanItself) {
   // x = 0, 1, 3, 7: distances 1, 2, 4 apart.
   const std::vector<Point3> p = {{0, 0, 0}, {1, 0, 0}, {3, 0, 0}, {7, 0, 0}};
@@ -52,7 +57,7 @@ TEST(FirstAtSamePosition, AChainWithinTheToleranceIsOneGroupAndNonFinitePointsSt
 // From one tree, and with the radius search only where the nearest other point is within the tolerance, the same
 // lists as the two functions apart: random points, exact repeats, near repeats (5e-10 mm off), a chain and
 // non-finite points.
-TEST(NearestOtherAndFirst, EqualsBothFunctionsApart) {
+TEST(FirstAtSamePosition, NamesEachGroupByItsFirstPoint) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> x(-50.0, 50.0);
@@ -64,10 +69,9 @@ TEST(NearestOtherAndFirst, EqualsBothFunctionsApart) {
   p.push_back({100, 0, 0});
   p.push_back({100 + 0.6e-9, 0, 0});
   p.push_back({100 + 1.2e-9, 0, 0});
-  const NearestAndFirst both = nearest_other_and_first(p, 1e-9);
-  EXPECT_EQ(both.nearest, nearest_others(p, 1));
+  const NearestAndFirst both{nearest_others(p, 1), first_at_same_position(p, 1e-9)};
   EXPECT_EQ(both.nearest[3350], 3350u);  // the non-finite point lists itself
-  EXPECT_EQ(both.first, first_at_same_position(p, 1e-9));
+  EXPECT_EQ(both.first[3350], 3350u);
   // The chain at x = 100 is one group, named by its first point.
   const std::size_t n = p.size();
   EXPECT_EQ(both.first[n - 1], n - 3);
@@ -107,7 +111,7 @@ void expect_brute_force_neighbours(int points, const std::vector<double>& cuts, 
 
   constexpr int kCount = 3;
   const std::vector<std::uint32_t> three = nearest_others(p, kCount);
-  const NearestAndFirst both = nearest_other_and_first(p, 1e-9);
+  const NearestAndFirst both{nearest_others(p, 1), first_at_same_position(p, 1e-9)};
   EXPECT_EQ(both.nearest[n - 1], n - 1);  // the non-finite point lists itself
   EXPECT_EQ(both.first[n - 1], n - 1);
   for (const std::size_t k : check) {

@@ -73,7 +73,7 @@ struct AdaptiveFitResult {
   int knots_inserted = 0;    // in u and v together
   double rms = 0.0;          // of the residuals (weighted), mm
   double max_residual = 0.0; // largest |residual| over points with weight > 0, mm
-  double noise_sigma = 0.0;  // robust estimate of the measurement noise, mm
+  double noise_sigma = 0.0;  // the measurement noise, mm (fitting/noise_estimate.hpp)
   int spans_above_noise = 0;
   double effective_dof = 0.0;    // tr H of the last fit (per coordinate)
   double log10_smoothing = 0.0;  // its smoothing, relative (PenalizedFitResult)
@@ -99,13 +99,10 @@ struct AdaptiveFitResult {
 
 // `start` gives degrees, knots and weights, the first iterate and the regularisation's target (the nominal or
 // offset surface); `params` the points' starting parameters on it (e.g. from registration).
-// `neighbours` (each point's nearest other point, see nearest_neighbours) may be given when the caller has
-// them; empty: computed here.
 [[nodiscard]] AdaptiveFitResult fit_surface(const nurbs::Surface& start, std::span<const Point3> points,
                                             std::span<const SurfaceParameter> params,
                                             std::span<const double> weights = {},
-                                            const AdaptiveFitOptions& options = {},
-                                            std::span<const std::uint32_t> neighbours = {});
+                                            const AdaptiveFitOptions& options = {});
 
 // Each point's foot point on `s`, by Newton from its parameters (the point's parameter is kept where Newton
 // does not converge). Parallel, deterministic.
@@ -130,14 +127,5 @@ class LocalSpread {
   const AdaptiveFitResult& fit_;
   std::vector<double> bu_, bv_;
 };
-
-// Each point's nearest other point in space (k-d tree), for neighbour_noise_sigma.
-[[nodiscard]] std::vector<std::uint32_t> nearest_neighbours(std::span<const Point3> points);
-
-// The noise standard deviation from differences of neighbouring residuals: a smooth misfit is shared by close
-// neighbours and cancels, independent noise does not (Var(r_i − r_j) = 2σ²): 1.4826 × MAD / √2 of r_i − r_j.
-// Pairs with a zero weight are left out; infinity when no pair is left.
-[[nodiscard]] double neighbour_noise_sigma(std::span<const double> residuals, std::span<const double> weights,
-                                           std::span<const std::uint32_t> neighbours);
 
 }  // namespace probecomp::fitting

@@ -19,12 +19,4 @@ namespace probecomp::geometry {
 // repeats an earlier point's position. Parallel, deterministic.
 [[nodiscard]] std::vector<std::uint32_t> first_at_same_position(std::span<const Point3> points, double tolerance);
 
-// Both of the above for one set, nearest_others(points, 1) and first_at_same_position(points, tolerance), from one
-// set of k-d trees (over 131 072 points, one per spatial block, built in parallel: nanoflann builds a tree on one
-// thread, a million points in about 0.27 s).
-struct NearestAndFirst {
-  std::vector<std::uint32_t> nearest, first;
-};
-[[nodiscard]] NearestAndFirst nearest_other_and_first(std::span<const Point3> points, double tolerance);
-
 }  // namespace probecomp::geometry

@@ -1,0 +1,43 @@
+#pragma once
+// The measurement noise from residuals, without trusting the fit to have followed the shape: each point's residual
+// against what its nearest neighbours' residuals predict for it through a local quadratic, so that a smooth misfit
+// the fit still leaves (a broad bulge between its knots) cancels and only independent noise remains.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "probecomp/geometry/types.hpp"
+
+namespace probecomp::fitting {
+
+// A difference-based noise estimate (in the spirit of Rice 1984 and Gasser, Sroka and Jennen-Steinmetz 1986, for
+// scattered points on a surface): for point k, the residuals of its kNeighbours nearest points are fitted with a
+// quadratic over their tangent plane (from the neighbourhood's principal axes), or along the line where they lie
+// on one (a scan line);
+// e_k = r_k − that quadratic at k has variance σ²(1 + a_k) exactly when the residuals' smooth part is locally
+// quadratic (a_k: the prediction's own variance factor), whatever the fit did. σ is 1.4826 × the median of
+// |e_k| / √(1 + a_k): a minority of gross errors or of points on a narrow feature does not move it.
+class LocalPredictionNoise {
+ public:
+  static constexpr int kNeighbours = 12;
+
+  // Built once per face from the points' positions and weights (zero: left out, as tested point and as
+  // neighbour). Over kMaxPoints points, every m-th point and its neighbours among those (deterministic).
+  LocalPredictionNoise(std::span<const Point3> points, std::span<const double> weights);
+
+  // σ of the noise in `residuals` (one per point, in the order given at construction), mm; infinity where no
+  // point has a usable neighbourhood.
+  [[nodiscard]] double sigma(std::span<const double> residuals) const;
+  // Points tested (those with a well-posed local quadratic).
+  [[nodiscard]] std::size_t tested() const { return tested_.size(); }
+
+ private:
+  static constexpr std::size_t kMaxPoints = 50'000;
+  std::vector<std::uint32_t> tested_;     // the tested points
+  std::vector<std::uint32_t> neighbour_;  // kNeighbours per tested point
+  std::vector<float> weight_;             // the prediction's weight of each neighbour's residual
+  std::vector<float> scale_;              // 1 / √(1 + a_k)
+};
+
+}  // namespace probecomp::fitting
