@@ -297,5 +297,134 @@ TEST(EdgeRows, ACutOutsEdgesAreFlaggedAndNoOkRowIsFarOff) {
   }
 }
 
+// A sheet part of four faces with open edges, as issue 49 found it: the panel, two walls `wall` mm high rising from
+// its v edges on its outward side (a channel: the probe measures the walls' inner faces, which meet the panel in
+// concave corners), and a skirt `skirt` mm deep turned down from its u1 edge (a convex edge). Each wall and the
+// skirt is ruled exactly from the panel's edge curve (its control points moved along a fixed direction, weights
+// kept). The walls' tops, the skirt's foot and the panel's u0 edge are open.
+cad::Model panel_with_walls(double wall, double skirt) {
+  cad::Model m = simulation::base_model(simulation::BaseSurface::Panel);
+  const nurbs::Surface s = m.faces[0].surface;  // a copy: the faces grow below
+  const nurbs::Domain d = s.domain();
+  const nurbs::SurfaceD1 mid = nurbs::derivatives_d1(s, 0.5 * (d.u0 + d.u1), 0.5 * (d.v0 + d.v1));
+  const Vector3 up = (m.faces[0].outward * mid.Su.cross(mid.Sv)).normalized();
+  // The face ruled from the panel's boundary row (along u: j = 0 or the last; along v: i = 0 or the last) along `dir`.
+  auto ruled = [&](bool along_u, int row, const Vector3& dir, const Vector3& inward, int index, const char* name) {
+    const int n = along_u ? s.num_u() : s.num_v();
+    std::vector<Point3> P;
+    std::vector<double> w;
+    for (int i = 0; i < n; ++i) {
+      const int a = along_u ? i : row, b = along_u ? row : i;
+      for (int j = 0; j < 2; ++j) {
+        P.push_back(s.control_point(a, b) + j * dir);
+        w.push_back(s.weight(a, b));
+      }
+    }
+    nurbs::Surface face(along_u ? s.U() : s.V(), nurbs::KnotVector({0.0, 0.0, 1.0, 1.0}, 1), P, w);
+    const nurbs::Domain fd = face.domain();
+    const nurbs::SurfaceD1 e = nurbs::derivatives_d1(face, 0.5 * (fd.u0 + fd.u1), 0.5);
+    const int outward = e.Su.cross(e.Sv).dot(inward) > 0.0 ? 1 : -1;
+    m.faces.push_back(cad::Face{.index = index, .name = name, .source_type = "bspline", .surface = std::move(face),
+                                .trim = nullptr, .outward = outward, .material_known = false, .exact = true});
+  };
+  const Vector3 sv = mid.Sv.normalized(), su = mid.Su.normalized();
+  ruled(true, 0, wall * up, sv, 1, "wall v0");
+  ruled(true, s.num_v() - 1, wall * up, -sv, 2, "wall v1");
+  ruled(false, s.num_u() - 1, -skirt * up, su, 3, "skirt");
+  return m;
+}
+
+// Grids on the four faces, then 15 touches at each of 20 stations along each open edge, from 0.5 mm beyond it to
+// 0.9 mm inside, approached along the face's normal there; 2° and 0.5 mm off. Of the touches whose true contact is on
+// an open edge, at least 90 % within 2u of the part; no `ok` row anywhere more than 20 µm from its true contact.
+TEST(EdgeRows, AnOpenShellsEdgesAreFlaggedAndNoOkRowIsFarOff) {
+  const cad::Model part = panel_with_walls(15.0, 10.0);
+  std::vector<simulation::ProgrammedPoint> plan;
+  auto at = [&](int f, double u, double v) {
+    const cad::Face& face = part.faces[static_cast<std::size_t>(f)];
+    const nurbs::SurfaceD1 e = nurbs::derivatives_d1(face.surface, u, v);
+    return simulation::ProgrammedPoint{e.S, face.outward * e.Su.cross(e.Sv).normalized(), f};
+  };
+  // Grids 2 mm and more clear of every edge (the corners' double contacts are another test's).
+  for (int f = 0; f < 4; ++f) {
+    const cad::Face& face = part.faces[static_cast<std::size_t>(f)];
+    const nurbs::Domain d = face.surface.domain();
+    const int nu = f == 0 ? 50 : 40, nv = f == 0 ? 40 : 6;
+    for (int i = 0; i < nu; ++i) {
+      for (int j = 0; j < nv; ++j) {
+        plan.push_back(at(f, d.u0 + (0.05 + 0.9 * i / (nu - 1)) * (d.u1 - d.u0), d.v0 + (0.2 + 0.6 * j / (nv - 1)) * (d.v1 - d.v0)));
+      }
+    }
+  }
+  const std::size_t interior = plan.size();
+  // Open edges: each wall's top (v = 1), the skirt's foot (v = 1), the panel's u0 edge; s mm inside along -S_v (or S_u).
+  struct OpenEdge {
+    int face;
+    bool along_u;  // the edge runs along u (at v = v1); else along v (at u = u0)
+  };
+  for (const OpenEdge& oe : {OpenEdge{1, true}, OpenEdge{2, true}, OpenEdge{3, true}, OpenEdge{0, false}}) {
+    const cad::Face& face = part.faces[static_cast<std::size_t>(oe.face)];
+    const nurbs::Domain d = face.surface.domain();
+    for (int j = 0; j < 20; ++j) {
+      const double a = 0.08 + 0.84 * j / 19.0;
+      const double u = oe.along_u ? d.u0 + a * (d.u1 - d.u0) : d.u0, v = oe.along_u ? d.v1 : d.v0 + a * (d.v1 - d.v0);
+      const nurbs::SurfaceD1 e = nurbs::derivatives_d1(face.surface, u, v);
+      const Vector3 inside = oe.along_u ? Vector3(-e.Sv.normalized()) : Vector3(e.Su.normalized());
+      const Vector3 normal = face.outward * e.Su.cross(e.Sv).normalized();
+      for (int k = 0; k <= 14; ++k) {
+        const double s = -0.5 + 0.1 * k;
+        if (s < 0.0) {
+          plan.push_back({e.S + s * inside, normal, oe.face});
+        } else {
+          const double len = oe.along_u ? e.Sv.norm() : e.Su.norm();
+          plan.push_back(at(oe.face, oe.along_u ? u : u + s / len, oe.along_u ? v - s / len : v));
+        }
+      }
+    }
+  }
+  const geometry::RigidTransform placement(Eigen::Translation3d(0.3, -0.3, 0.25) *
+                                           Eigen::AngleAxisd(0.035, Vector3(1, 0.4, 0.2).normalized()));
+  // The plan follows the part: left in the CAD frame, the touches beyond the walls' tops would miss it.
+  std::vector<simulation::ProgrammedPoint> run = plan;
+  for (simulation::ProgrammedPoint& p : run) {
+    p.point = placement * p.point;
+    p.normal = placement.linear() * p.normal;
+  }
+  const studies::SimulatedMeasurement m{
+      .nominal = part, .deformation = {}, .placement = placement, .plan = run, .probe_radius = 1.0, .noise_sigma = 0.002, .seed = 17};
+  const studies::MethodComparison r = studies::compare_methods(m, {.approach_normals = true});
+  const cad::Model actual = simulation::actual_model(part, m.deformation, m.placement);
+  const cad::ModelLocator located(actual);
+  int rim = 0, rim_good = 0, rim_flagged = 0, bad_ok = 0, interior_ok = 0;
+  double worst_ok = 0.0, interior_ss = 0.0;
+  for (std::size_t k = 0; k < run.size(); ++k) {
+    const CompensatedPoint& c = r.cad.points[k];
+    const simulation::Touch& t = r.touches[k];
+    if (t.status == simulation::Touch::Status::Missed) continue;
+    if (c.status == PointStatus::Ok) {
+      const double e = (c.contact - t.contact).norm();
+      worst_ok = std::max(worst_ok, e);
+      bad_ok += e > 0.02;
+      if (k < interior) {
+        ++interior_ok;
+        interior_ss += r.cad_error[k] * r.cad_error[k];
+      }
+    }
+    if (k < interior || t.status != simulation::Touch::Status::Edge) continue;
+    ++rim;
+    const cad::ModelPoint foot = located.closest_point(c.contact);
+    const bool within = foot.ok() && std::abs(foot.distance) <= 2.0 * c.uncertainty;
+    rim_flagged += c.status == PointStatus::Edge && within;
+    rim_good += (c.status == PointStatus::Edge || c.status == PointStatus::Ok) && within;
+  }
+  std::printf("open shell: rim touches %d, within 2u %d (flagged %d); ok rows more than 20 um off %d (worst %.1f um); "
+              "interior ok rows %d of %zu, rms error %.2f um\n",
+              rim, rim_good, rim_flagged, bad_ok, worst_ok * 1e3, interior_ok, interior,
+              std::sqrt(interior_ss / std::max(interior_ok, 1)) * 1e3);
+  EXPECT_GE(rim, 250);  // of 1 200 touches, about 5 a station
+  EXPECT_GE(rim_good, 0.9 * rim);
+  EXPECT_EQ(bad_ok, 0);
+}
+
 }  // namespace
 }  // namespace probecomp::compensation
