@@ -234,9 +234,15 @@ std::optional<ElementarySurface> elementary_surface(const TopoDS_Face& face) {
 
 nurbs::Curve to_curve(const Handle(Geom2d_BSplineCurve)& in) {
   Handle(Geom2d_BSplineCurve) c = in;
-  if (c->IsPeriodic()) {
+  // Clamped as occt::from_occt clamps a surface: made non-periodic, then cut to its range where its end knots are
+  // fewer than p + 1 (knot insertion, exact).
+  auto unclamped = [](const Handle(Geom2d_BSplineCurve)& b) {
+    return b->Multiplicity(1) < b->Degree() + 1 || b->Multiplicity(b->NbKnots()) < b->Degree() + 1;
+  };
+  if (c->IsPeriodic() || unclamped(c)) {
     c = Handle(Geom2d_BSplineCurve)::DownCast(in->Copy());
-    c->SetNotPeriodic();
+    if (c->IsPeriodic()) c->SetNotPeriodic();
+    if (unclamped(c)) c->Segment(c->FirstParameter(), c->LastParameter());
   }
   TColStd_Array1OfReal flat(1, c->NbPoles() + c->Degree() + 1);
   c->KnotSequence(flat);

@@ -58,10 +58,23 @@ Handle(Geom_BSplineSurface) to_occt(const nurbs::Surface& s) {
 
 nurbs::Surface from_occt(const Handle(Geom_BSplineSurface)& in) {
   Handle(Geom_BSplineSurface) s = in;
-  if (s->IsUPeriodic() || s->IsVPeriodic()) {
+  // The kernel's knot vectors are clamped (end knots of multiplicity p + 1). A periodic surface is made
+  // non-periodic, and one whose end knots are fewer (unclamped: a file's uniform knots, or OpenCASCADE's
+  // conversion of a surface of revolution, NIST STC-06's turned faces) is cut to its parameter range, which
+  // inserts the end knots p + 1 times (knot insertion: the same surface, not an approximation).
+  auto unclamped = [](const Handle(Geom_BSplineSurface)& b) {
+    return b->UMultiplicity(1) < b->UDegree() + 1 || b->UMultiplicity(b->NbUKnots()) < b->UDegree() + 1 ||
+           b->VMultiplicity(1) < b->VDegree() + 1 || b->VMultiplicity(b->NbVKnots()) < b->VDegree() + 1;
+  };
+  if (s->IsUPeriodic() || s->IsVPeriodic() || unclamped(s)) {
     s = Handle(Geom_BSplineSurface)::DownCast(in->Copy());
     if (s->IsUPeriodic()) s->SetUNotPeriodic();
     if (s->IsVPeriodic()) s->SetVNotPeriodic();
+    if (unclamped(s)) {
+      double u0 = 0.0, u1 = 0.0, v0 = 0.0, v1 = 0.0;
+      s->Bounds(u0, u1, v0, v1);
+      s->Segment(u0, u1, v0, v1);
+    }
   }
   const int nu = s->NbUPoles();
   const int nv = s->NbVPoles();

@@ -30,6 +30,10 @@ const CadFile kFiles[] = {
     {"gismo_hammer.iges", 45, "mm"},          {"pyiges_impeller.igs", 277, "mm"},
     {"asitus_wavy-cube.stp", 6, "mm"},        {"asitus_repatch-hpdc.stp", 232, "mm"},
     {"asitus_tail_section_asm.stp", 618, "mm"},
+    // NIST's AP242 test parts. STC-06's turned faces convert to unclamped B-splines, clamped on loading.
+    {"nist_ctc_02_asme1_ap242-e2.stp", 637, "mm"}, {"nist_ctc_04_asme1_ap242-e1.stp", 484, "mm"},
+    {"nist_ftc_06_asme1_ap242-e2.stp", 187, "mm"}, {"nist_stc_06_asme1_ap242-e3.stp", 144, "mm"},
+    {"nist_stc_08_asme1_ap242-e3.stp", 271, "mm"},
 };
 
 // OpenCASCADE's own faces of the file, in explorer order (the order the model promises), in millimetres.

@@ -4,6 +4,11 @@
 
 #include <random>
 
+#include <TColStd_Array1OfInteger.hxx>
+#include <TColStd_Array1OfReal.hxx>
+#include <TColStd_Array2OfReal.hxx>
+#include <TColgp_Array2OfPnt.hxx>
+
 #include "probecomp/nurbs/surface.hpp"
 #include "probecomp/occt/convert.hpp"
 #include "support/test_surfaces.hpp"
@@ -58,6 +63,59 @@ TEST(SurfaceVsOpenCascade, RoundTripThroughOpenCascadeKeepsTheSurface) {
   for (int i = 0; i < s.num_u(); ++i)
     for (int j = 0; j < s.num_v(); ++j) EXPECT_LT((back.homogeneous(i, j) - s.homogeneous(i, j)).norm(), 1e-12);
   EXPECT_TRUE(std::equal(back.U().knots().begin(), back.U().knots().end(), s.U().knots().begin()));
+}
+
+// An unclamped surface (uniform knots, end multiplicity 1, as a file's uniform B-spline or OpenCASCADE's conversion
+// of a surface of revolution gives it: NIST STC-06) and a periodic one come back clamped, with the same values at
+// the same (u, v) over OpenCASCADE's parameter range.
+TEST(SurfaceVsOpenCascade, UnclampedAndPeriodicSurfacesComeBackClampedAndTheSame) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> jitter(-0.3, 0.3), weight(0.7, 1.4);
+  for (const bool periodic : {false, true}) {
+    SCOPED_TRACE(periodic ? "periodic in u" : "unclamped in u and v");
+    constexpr int p = 2, q = 3, nu = 7, nv = 6;
+    TColgp_Array2OfPnt poles(1, nu, 1, nv);
+    TColStd_Array2OfReal weights(1, nu, 1, nv);
+    for (int i = 1; i <= nu; ++i) {
+      for (int j = 1; j <= nv; ++j) {
+        const double a = 2.0 * M_PI * (i - 1) / nu;
+        poles.SetValue(i, j, periodic ? gp_Pnt(20.0 * std::cos(a), 20.0 * std::sin(a), 4.0 * j + jitter(rng))
+                                      : gp_Pnt(5.0 * i, 4.0 * j, jitter(rng)));
+        weights.SetValue(i, j, weight(rng));
+      }
+    }
+    // Unclamped: every knot simple (n + p + 1 of them in u, m + q + 1 in v). Periodic in u: nu + 1 simple knots,
+    // and v clamped with two simple interior knots.
+    const int ku = periodic ? nu + 1 : nu + p + 1, kv = periodic ? 4 : nv + q + 1;
+    TColStd_Array1OfReal uk(1, ku), vk(1, kv);
+    TColStd_Array1OfInteger um(1, ku), vm(1, kv);
+    for (int i = 1; i <= ku; ++i) {
+      uk.SetValue(i, i - 1.0);
+      um.SetValue(i, 1);
+    }
+    for (int j = 1; j <= kv; ++j) {
+      vk.SetValue(j, periodic ? j - 1.0 : 0.5 * (j - 1));
+      vm.SetValue(j, periodic && (j == 1 || j == kv) ? q + 1 : 1);
+    }
+    const Handle(Geom_BSplineSurface) ref = new Geom_BSplineSurface(poles, weights, uk, vk, um, vm, p, q, periodic, false);
+    const Surface s = occt::from_occt(ref);
+    EXPECT_EQ(s.U().multiplicity(s.U().front()), p + 1);
+    EXPECT_EQ(s.V().multiplicity(s.V().front()), q + 1);
+    double u0 = 0.0, u1 = 0.0, v0 = 0.0, v1 = 0.0;
+    ref->Bounds(u0, u1, v0, v1);
+    const Domain d = s.domain();
+    EXPECT_DOUBLE_EQ(d.u0, u0);
+    EXPECT_DOUBLE_EQ(d.u1, u1);
+    EXPECT_DOUBLE_EQ(d.v0, v0);
+    EXPECT_DOUBLE_EQ(d.v1, v1);
+    std::uniform_real_distribution<double> t(0.0, 1.0);
+    double worst = 0.0;
+    for (int k = 0; k < 1000; ++k) {
+      const double u = u0 + (u1 - u0) * t(rng), v = v0 + (v1 - v0) * t(rng);
+      worst = std::max(worst, (evaluate(s, u, v) - v3(ref->Value(u, v))).norm());
+    }
+    EXPECT_LT(worst, 1e-12);
+  }
 }
 
 }  // namespace
