@@ -8,12 +8,15 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <vector>
 
 #include "probecomp/compensation/contact.hpp"
 #include "probecomp/geometry/statistics.hpp"
 #include "probecomp/nurbs/closest_point.hpp"
 #include "probecomp/registration/constraints.hpp"
+
+#include "element_faces.hpp"
 
 namespace probecomp::compensation {
 
@@ -41,6 +44,9 @@ Point3 as_smallest_tip(const PreparedModel& prepared, const registration::Regist
 namespace {
 
 using detail::as_smallest_tip;
+using detail::element_distance;
+using detail::element_noise;
+using detail::element_normal;
 using detail::normal_doubt;
 
 // The distance of x from its foot point on `face`, + on the outward side. Only the side is taken from the normal,
@@ -77,10 +83,26 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
       for (std::size_t k : ff.members) unfitted[k] = 0;
     }
   }
-  // Each fitted face by position, for the rows past its edges.
-  std::vector<const FaceFit*> fitted_face(work.faces.size(), nullptr);
+  // Each fitted face by position, for the rows past its edges; each face fitted as its element, and which of its
+  // points that fit left out.
+  std::vector<const FaceFit*> fitted_face(work.faces.size(), nullptr), element_face(work.faces.size(), nullptr);
+  std::vector<char> element_outlier(raw.size(), 0);
   for (const FaceFit& ff : fits.faces) {
     if (ff.report.fitted && ff.fit) fitted_face[static_cast<std::size_t>(ff.face)] = &ff;
+    if (ff.element) {
+      element_face[static_cast<std::size_t>(ff.face)] = &ff;
+      for (std::size_t i = 0; i < ff.members.size(); ++i) element_outlier[ff.members[i]] = !ff.trusted[i];
+    }
+  }
+  // The noise of a point on an element face: the NURBS fits' (their median), which a few points cannot match,
+  // else the element's own residuals (which hold the face's form error too: on the safe side).
+  std::optional<double> fitted_noise;
+  {
+    std::vector<double> sigma;
+    for (const FaceFit& ff : fits.faces) {
+      if (ff.report.fitted) sigma.push_back(ff.fit->noise_sigma);
+    }
+    if (!sigma.empty()) fitted_noise = geometry::median_in_place(sigma);
   }
   tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
     if (!unfitted[k] || !raw[k].allFinite()) return;
@@ -98,6 +120,27 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
       return;
     }
     const Vector3 towards = (foot.distance < 0.0 ? -1.0 : 1.0) * (x - foot.point).normalized();
+    const FaceFit* ef = m.face >= 0 ? element_face[static_cast<std::size_t>(m.face)] : nullptr;
+    if (ef != nullptr && !m.on_edge && !double_contact(k)) {
+      // On a face fitted as its element: offset along the element's normal, which the data show, not the
+      // nominal's. The contact keeps the centre's own noise along it (the point is not smoothed onto the element:
+      // a plane's ten points keep their form deviations).
+      // (The element was fitted in the machine frame, as the faces' NURBS are.)
+      const ElementFaceFit& e = *ef->element;
+      const Vector3 n = element_normal(e, raw[k], T.linear() * towards);
+      const double r = radii[k];
+      c.status = element_outlier[k] ? PointStatus::Outlier : PointStatus::Ok;
+      c.face = work.faces[static_cast<std::size_t>(m.face)].index;
+      c.normal = n;
+      c.contact = raw[k] - r * n;
+      const cad::ModelPoint at = prepared.nominal_locator->closest_point(to_cad * c.contact, foot);
+      c.deviation = at.ok() ? at.distance : foot.distance - r;
+      const double noise = fitted_noise ? *fitted_noise : element_noise(e);
+      c.uncertainty = std::isfinite(noise) ? noise : registration.scale;
+      // An outlier's reading and the element disagree by its distance from it; which is right is not known.
+      if (element_outlier[k]) c.uncertainty = std::hypot(c.uncertainty, std::abs(element_distance(e, raw[k])));
+      return;
+    }
     c.status = m.on_edge ? PointStatus::Edge : double_contact(k) ? PointStatus::DoubleContact : PointStatus::FewPoints;
     c.face = work.faces[static_cast<std::size_t>(foot.face)].index;
     c.normal = T.linear() * towards;

@@ -21,6 +21,7 @@
 #include "probecomp/nurbs/degree_elevation.hpp"
 
 #include "contact_points.hpp"
+#include "element_faces.hpp"
 #include "input_checks.hpp"
 #include "warnings.hpp"
 
@@ -311,9 +312,24 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
         rep.stop_reason = fit_stop_reason(*fit, options.surface) + kOffsetAlongNominal;
         fit.reset();
       } else {
-        rep.stop_reason = kNotFitted + std::to_string(pts.size()) + " points off the edges for " +
-                          std::to_string(start.num_u() * start.num_v()) + " control points (" + mm(needed) +
-                          " needed)" + kOffsetAlongNominal;
+        const std::string too_few = std::to_string(pts.size()) + " points off the edges for " +
+                                    std::to_string(start.num_u() * start.num_v()) + " control points (" + mm(needed) +
+                                    " needed)";
+        // Too few for the NURBS, but a plane, cylinder or sphere is fixed by a handful: fitted as that, its points
+        // offset along its normal (contact_points.cpp), not the nominal's.
+        std::vector<char> left_out;
+        ff.element = detail::fit_element_face(face, pts, registration.transform, prepared.radii.smallest(), left_out);
+        if (ff.element) {
+          rep.fitted_as = ff.element->kind;
+          for (std::size_t i = 0; i < members.size(); ++i) ff.trusted[i] = !left_out[position[i]];
+          rep.rms = ff.element->rms;
+          const double noise = detail::element_noise(*ff.element);
+          if (std::isfinite(noise)) rep.noise_sigma = noise;
+          rep.stop_reason = std::string("fitted as a ") + cad::to_string(ff.element->kind) + ": " + too_few +
+                            "; " + std::to_string(ff.element->used) + " points used, rms " + mm(ff.element->rms);
+        } else {
+          rep.stop_reason = kNotFitted + too_few + kOffsetAlongNominal;
+        }
       }
     }
     done += members.size();

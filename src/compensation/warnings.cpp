@@ -41,7 +41,7 @@ void unfitted_face_warnings(const std::vector<FaceReport>& faces, std::vector<st
   std::vector<const FaceReport*> unfitted;
   int points = 0;
   for (const FaceReport& f : faces) {
-    if (f.fitted || f.points == 0) continue;
+    if (f.fitted || f.fitted_as || f.points == 0) continue;
     unfitted.push_back(&f);
     points += f.points;
   }

@@ -335,7 +335,7 @@ std::string html_report(const compensation::CompensationResult& r, const ReportC
       << "</td><td>" << mm6(d.std) << "</td><td>" << mm6(d.min) << "</td><td>" << mm6(d.max) << "</td>";
     if (c.tolerance) h << "<td" << (d.out_of_tolerance > 0 ? " class=\"fail\"" : "") << ">" << d.out_of_tolerance << "</td>";
     h << "<td>" << fmt("%.2f", 1000.0 * x.mean_uncertainty) << "</td><td class=\"l\">"
-      << (x.fitted ? "fitted: " : "not fitted: ") << xml_escape(x.stop_reason) << "</td></tr>\n";
+      << (x.fitted ? "fitted: " : x.fitted_as ? "" : "not fitted: ") << xml_escape(x.stop_reason) << "</td></tr>\n";
   }
   h << "</table>\n";
   // Registration.

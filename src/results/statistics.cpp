@@ -157,6 +157,11 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
       face["outliers"] = x.count(compensation::PointStatus::Outlier);
       face["repeated_points"] = x.repeated;
       face["noise_reached"] = x.fit_status == fitting::AdaptiveFitResult::Status::OK;
+    } else if (x.fitted_as) {
+      face["fitted_as"] = cad::to_string(*x.fitted_as);
+      face["rms_residual"] = number(x.rms);
+      face["noise_estimate"] = number(x.noise_sigma);
+      face["outliers"] = x.count(compensation::PointStatus::Outlier);
     }
     face["counts"] = counts(x.counts);
     face["deviation"] = deviation(dev.faces[f]);

@@ -20,7 +20,10 @@ json_check_result() { [ "$LIGHT" = light ] || json_check "$@"; }
 SCORE="$(dirname "$0")/score.awk"
 HPDC="$CAD/asitus_repatch-hpdc.stp"
 # ok_within DIR STD_UM MAX_UM: the ok rows' error std and largest |error| (µm) within the bounds, and at least
-# 40 % of the rows ok (the rest: edges, and faces with too few points for a fit). Prints the scores when not.
+# 40 % of the rows ok. The ok rows include the points of faces too sparse for a NURBS fit but fitted as the plane,
+# cylinder or sphere they are: those keep each touch's own noise (σ = 2 µm here), so their largest error among a
+# few hundred is 6–7 µm where the smoothed rows' is under 5 µm. The rest: edges, and faces with too few points for
+# either fit. Prints the scores when not.
 ok_within() {
   awk -F, -f "$SCORE" "$1/truth.csv" "$1/out.csv" >"$1/score.txt"
   rows=$(($(wc -l <"$1/out.csv") - 1))
@@ -63,7 +66,7 @@ json_check_result "$W/partial/out.json" \
   --seed 3 --output-dir "$W/stylus3" >/dev/null || { echo "FAIL: simulate stylus3"; fail=1; }
 "$P" compensate --cad "$HPDC" --points "$W/stylus3/raw.csv" --probe-radius 3 --output "$W/stylus3/out.csv" \
   --json "$W/stylus3/out.json" --quiet 2>/dev/null || { echo "FAIL: stylus3"; fail=1; }
-check_result "ok_within '$W/stylus3' 1 5" "3 mm stylus: ok rows within std 1 um, max 5 um"
+check_result "ok_within '$W/stylus3' 1 8" "3 mm stylus: ok rows within std 1 um, max 8 um"
 check_result "rows_within '$W/stylus3' edge 4 12" "3 mm stylus: edge rows within std 4 um, max 12 um"
 check_result "rows_within '$W/stylus3' few-points 4 12" "3 mm stylus: few-points rows within std 4 um, max 12 um"
 # The part is rigid, so a double contact's true deviation is zero on either face it touches.
@@ -101,7 +104,7 @@ check_result "grep -q 'doubtful.*--accept-doubtful-registration' '$W/stderr'" "f
 printf '# 30 degrees about x\n1 0 0 0\n0 0.8660254037844387 -0.5 0\n0, 0.5, 0.8660254037844387, 0\n0 0 0 1\n' >"$W/far/T.txt"
 "$P" compensate --cad "$HPDC" --points "$W/far/raw.csv" --probe-radius 1 --initial-transform "$W/far/T.txt" \
   --output "$W/far/out.csv" --json "$W/far/out.json" --quiet || { echo "FAIL: --initial-transform"; fail=1; }
-check_result "ok_within '$W/far' 1 5" "far with --initial-transform: ok rows within std 1 um, max 5 um"
+check_result "ok_within '$W/far' 1 8" "far with --initial-transform: ok rows within std 1 um, max 8 um"
 json_check_result "$W/far/out.json" "abs(j['transform'][1][1] - 0.8191520) < 1e-4" \
   "far: the registered rotation is 35 degrees (cos 0.8191520)"
 [ "$LIGHT" = light ] || "$P" compensate --cad "$HPDC" --points "$W/far/raw.csv" --probe-radius 1 \

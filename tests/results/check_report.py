@@ -136,9 +136,13 @@ def check_numbers(page, stats, expect_tolerance):
             close(r[k], fd[name], 5.1e-7, "face %s deviation %s" % (f["face"], name))
         if expect_tolerance and int(r[7]) != fd["out_of_tolerance"]:
             fail("face %s out of tolerance: %s against %s" % (f["face"], r[7], fd["out_of_tolerance"]))
-        fitted = r[-1].startswith("fitted")
+        fitted = r[-1].startswith("fitted: ")
         if fitted != f["fitted"]:
             fail("face %s: the report says fitted %s, the JSON %s" % (f["face"], fitted, f["fitted"]))
+        # A face too sparse for its NURBS but fitted as its element: "fitted as a plane: ..." and the JSON's fitted_as.
+        fitted_as = r[-1][len("fitted as a "):].split(":")[0] if r[-1].startswith("fitted as a ") else None
+        if fitted_as != f.get("fitted_as"):
+            fail("face %s: the report says fitted as %s, the JSON %s" % (f["face"], fitted_as, f.get("fitted_as")))
     ok("%d face rows equal the JSON's faces" % len(rows))
 
     matrix = [float(v) for row in page.tables["transform"] for v in row]

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "probecomp/cad/analytic.hpp"
 #include "probecomp/cad/locator.hpp"
 #include "probecomp/cad/material_side.hpp"
 #include "probecomp/cad/model.hpp"
@@ -75,6 +76,9 @@ struct FaceReport {
   int face = -1;          // cad::Face::index
   int points = 0;         // points assigned to the face by their correspondence
   bool fitted = false;    // else its points were offset along the nominal normal (too few for a fit)
+  // Too few points for its NURBS fit, but fitted as the plane, cylinder or sphere it is: its points are offset
+  // along that element's normal (status ok).
+  std::optional<cad::ElementaryKind> fitted_as;
   int outward = 1;        // of the fitted surface, as cad::Face::outward
   cad::MaterialSource material = cad::MaterialSource::File;
   fitting::AdaptiveFitResult::Status fit_status = fitting::AdaptiveFitResult::Status::NotDone;
@@ -196,6 +200,19 @@ struct FitOptions {
 };
 
 // One face's points and its fit.
+// A face with too few points for its NURBS net, fitted as the plane, cylinder or sphere it is (its centres' own
+// least-squares element, fitting/elements.hpp; the tip's centres lie on an element of the same kind and axis), in
+// the machine frame.
+struct ElementFaceFit {
+  cad::ElementaryKind kind = cad::ElementaryKind::Plane;
+  Point3 point = Point3::Zero();    // plane: the centroid; cylinder: a point of the axis; sphere: the centre
+  Vector3 axis = Vector3::Zero();   // plane: its normal; cylinder: the axis (unit, sign arbitrary)
+  double radius = 0.0;              // of the centres' cylinder or sphere, mm
+  double rms = 0.0;                 // of the points used, orthogonal to the element, mm
+  int used = 0;                     // points used (the rest left out as outliers)
+  int parameters = 0;               // the element's: 3 plane, 4 sphere, 5 cylinder
+};
+
 struct FaceFit {
   int face = -1;                                   // position in the prepared model's faces
   std::vector<std::uint32_t> members;              // input indices of the points fitted on it, ascending (4 B each)
@@ -209,6 +226,7 @@ struct FaceFit {
   // The points lie along lines (a scanning probe's), and each on a line was checked so (normal_support.hpp).
   bool normal_checked_along_lines = false;
   std::optional<fitting::AdaptiveFitResult> fit;   // when the face was fitted
+  std::optional<ElementFaceFit> element;           // when it was too sparse for that, but fitted as its element
   FaceReport report;
 };
 

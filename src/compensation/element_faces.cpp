@@ -1,0 +1,156 @@
+#include "element_faces.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "probecomp/fitting/elements.hpp"
+#include "probecomp/geometry/statistics.hpp"
+
+namespace probecomp::compensation::detail {
+
+namespace {
+
+// A centre this many robust scales (1.4826 × MAD) of the element's residuals off it is left out: a gross error
+// (a touch on a burr, a chip) would tilt a plane fitted to ten points. Among ten Gaussian residuals, one beyond 5
+// scales has odds below 1 in 10^5.
+constexpr double kElementOutlierScales = 5.0;
+// The element must be the nominal's, moved by the part's own form and the registration's error, not another shape:
+// its axis (a plane's normal) within this angle of the nominal's, and a cylinder's or sphere's radius within
+// kMaxRadiusChange of the nominal's offset by the tip (a hole's centres lie at R − r, a pin's at R + r).
+constexpr double kMaxElementTilt = 3.0 * std::numbers::pi / 180.0;
+constexpr double kMaxRadiusChange = 0.1;  // mm
+
+// The scale is not taken below this (mm): on exact data the residuals are rounding, and every point would stand out.
+constexpr double kScaleFloor = 1e-4;
+
+struct Fitted {
+  ElementFaceFit e;
+  bool ok = false;
+};
+
+Fitted fit_kind(cad::ElementaryKind kind, std::span<const Point3> pts) {
+  Fitted out;
+  out.e.kind = kind;
+  out.e.used = static_cast<int>(pts.size());
+  switch (kind) {
+    case cad::ElementaryKind::Plane: {
+      const fitting::PlaneFit f = fitting::fit_plane(pts);
+      out.ok = f.status == fitting::ElementFitStatus::OK;
+      out.e.point = f.point;
+      out.e.axis = f.normal;
+      out.e.rms = f.rms;
+      out.e.parameters = 3;
+      break;
+    }
+    case cad::ElementaryKind::Cylinder: {
+      const fitting::CylinderFit f = fitting::fit_cylinder(pts);
+      out.ok = f.status == fitting::ElementFitStatus::OK;
+      out.e.point = f.axis_point;
+      out.e.axis = f.axis;
+      out.e.radius = f.radius;
+      out.e.rms = f.rms;
+      out.e.parameters = 5;
+      break;
+    }
+    case cad::ElementaryKind::Sphere: {
+      const fitting::SphereFit f = fitting::fit_sphere(pts);
+      out.ok = f.status == fitting::ElementFitStatus::OK;
+      out.e.point = f.center;
+      out.e.radius = f.radius;
+      out.e.rms = f.rms;
+      out.e.parameters = 4;
+      break;
+    }
+    default: break;
+  }
+  // At least one degree of freedom more than the element has: else the fit passes through the points and says
+  // nothing of the noise.
+  out.ok = out.ok && out.e.used > out.e.parameters;
+  return out;
+}
+
+// Whether the fitted element is the nominal one offset by r (machine frame): see kMaxElementTilt.
+bool like_nominal(const ElementFaceFit& e, const cad::Face& face, const geometry::RigidTransform& to_machine, double r,
+                  const Point3& some_centre) {
+  const cad::ElementarySurface& nominal = face.analytic->surface();
+  const Vector3 axis = to_machine.linear() * nominal.z;
+  if (e.kind != cad::ElementaryKind::Sphere && std::abs(e.axis.dot(axis)) < std::cos(kMaxElementTilt)) return false;
+  if (e.kind == cad::ElementaryKind::Plane) return true;
+  // Convex (a pin, a ball) where the outward normal points away from the axis or centre: centres at R + r.
+  const Point3 x = to_machine.inverse() * some_centre;
+  const nurbs::ClosestPointResult foot = face.analytic->closest_point(x);
+  const Vector3 n = static_cast<double>(face.outward) * foot.Su.cross(foot.Sv);
+  Vector3 radial = x - nominal.origin;
+  if (e.kind == cad::ElementaryKind::Cylinder) radial -= radial.dot(nominal.z) * nominal.z;
+  const bool convex = n.dot(radial) > 0.0;
+  const double expected = nominal.radius + (convex ? r : -r);
+  return expected > 0.0 && std::abs(e.radius - expected) <= kMaxRadiusChange;
+}
+
+}  // namespace
+
+std::optional<ElementFaceFit> fit_element_face(const cad::Face& face, std::span<const Point3> centres,
+                                               const geometry::RigidTransform& to_machine, double r,
+                                               std::vector<char>& outlier) {
+  if (!face.analytic || centres.empty()) return std::nullopt;
+  const cad::ElementaryKind kind = face.analytic->surface().kind;
+  if (kind != cad::ElementaryKind::Plane && kind != cad::ElementaryKind::Cylinder && kind != cad::ElementaryKind::Sphere) {
+    return std::nullopt;
+  }
+  outlier.assign(centres.size(), 0);
+  Fitted all = fit_kind(kind, centres);
+  if (!all.ok || !like_nominal(all.e, face, to_machine, r, centres[0])) {
+    outlier.assign(centres.size(), 0);
+    return std::nullopt;
+  }
+  std::vector<double> off(centres.size());
+  for (std::size_t k = 0; k < centres.size(); ++k) off[k] = std::abs(element_distance(all.e, centres[k]));
+  std::vector<double> work = off;
+  const double scale = std::max(geometry::kMadToSigma * geometry::median_in_place(work), kScaleFloor);
+  std::vector<Point3> kept;
+  for (std::size_t k = 0; k < centres.size(); ++k) {
+    outlier[k] = off[k] > kElementOutlierScales * scale;
+    if (!outlier[k]) kept.push_back(centres[k]);
+  }
+  if (kept.size() == centres.size()) return all.e;
+  Fitted again = fit_kind(kind, kept);
+  if (!again.ok || !like_nominal(again.e, face, to_machine, r, kept[0])) {
+    outlier.assign(centres.size(), 0);
+    return all.e;
+  }
+  return again.e;
+}
+
+double element_distance(const ElementFaceFit& e, const Point3& x) {
+  switch (e.kind) {
+    case cad::ElementaryKind::Plane: return e.axis.dot(x - e.point);
+    case cad::ElementaryKind::Cylinder: {
+      const Vector3 d = x - e.point;
+      return (d - d.dot(e.axis) * e.axis).norm() - e.radius;
+    }
+    case cad::ElementaryKind::Sphere: return (x - e.point).norm() - e.radius;
+    default: return 0.0;
+  }
+}
+
+Vector3 element_normal(const ElementFaceFit& e, const Point3& x, const Vector3& towards) {
+  Vector3 n = e.axis;
+  if (e.kind == cad::ElementaryKind::Cylinder) {
+    const Vector3 d = x - e.point;
+    n = d - d.dot(e.axis) * e.axis;
+  } else if (e.kind == cad::ElementaryKind::Sphere) {
+    n = x - e.point;
+  }
+  if (!(n.norm() > 0.0)) return towards.normalized();
+  n.normalize();
+  return n.dot(towards) < 0.0 ? Vector3(-n) : n;
+}
+
+double element_noise(const ElementFaceFit& e) {
+  if (e.used <= e.parameters) return std::numeric_limits<double>::infinity();
+  return e.rms * std::sqrt(static_cast<double>(e.used) / static_cast<double>(e.used - e.parameters));
+}
+
+}  // namespace probecomp::compensation::detail

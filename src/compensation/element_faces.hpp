@@ -1,0 +1,36 @@
+#pragma once
+// Faces too sparse for their NURBS net (10–40 touches on a plane or a hole, the usual way a CMM measures a prismatic
+// face), fitted as the plane, cylinder or sphere the CAD file says they are. Private to compensation/.
+
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "probecomp/cad/model.hpp"
+#include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/geometry/rigid.hpp"
+
+namespace probecomp::compensation::detail {
+
+// The face's element fitted to its tip centres (machine frame, as the faces' NURBS fits; `to_machine` the
+// registration), with points beyond kElementOutlierScales robust scales of the fit's residuals left out (`outlier`,
+// per centre, set to 1) and the element fitted again. Nothing where the face is not a plane, cylinder or sphere,
+// the centres do not fix the element (too few, all on a line), or the element is not the nominal's offset by the
+// tip radius `r` to within kMaxElementTilt and kMaxRadiusChange (a hole narrower than the tip, a fit that found
+// another shape in a few points): those points stay offset along the nominal normal.
+[[nodiscard]] std::optional<ElementFaceFit> fit_element_face(const cad::Face& face, std::span<const Point3> centres,
+                                                             const geometry::RigidTransform& to_machine, double r,
+                                                             std::vector<char>& outlier);
+
+// The signed distance of x from the element, mm (plane: along its normal as fitted; cylinder, sphere: positive
+// outside their radius).
+[[nodiscard]] double element_distance(const ElementFaceFit& e, const Point3& x);
+
+// The element's unit normal at (or nearest) x, pointing as `towards` does (the side the tip was on).
+[[nodiscard]] Vector3 element_normal(const ElementFaceFit& e, const Point3& x, const Vector3& towards);
+
+// A point's noise along the normal the element's residuals show: their rms with the element's parameters'
+// share of the degrees of freedom given back (√(n / (n − k))); infinity with no degree of freedom left.
+[[nodiscard]] double element_noise(const ElementFaceFit& e);
+
+}  // namespace probecomp::compensation::detail

@@ -1,0 +1,96 @@
+// Sparse touches on the planes and cylinders of a real part (NIST STC-06, AP242), as a CMM measures a prismatic face:
+// 12–20 points a face, too few for the face's NURBS net. Each such face is fitted as the element the file says it
+// is, and its rows come back ok with the simulator's truth within ±2u.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "probecomp/cad/locator.hpp"
+#include "probecomp/cad/model.hpp"
+#include "probecomp/simulation/measure.hpp"
+#include "probecomp/studies/comparison.hpp"
+#include "support/data_files.hpp"
+
+namespace probecomp::compensation {
+namespace {
+
+// Up to `count` programmed points on the face, at random inside its trim and at least `margin` mm from its boundary,
+// approached along its outward normal.
+std::vector<simulation::ProgrammedPoint> sparse_plan(const cad::Face& face, int count, double margin, std::mt19937_64& rng) {
+  const cad::TrimmedFaceLocator located(face);
+  const nurbs::Domain d = face.surface.domain();
+  std::uniform_real_distribution<double> a(0.0, 1.0);
+  std::vector<simulation::ProgrammedPoint> out;
+  for (int attempt = 0; attempt < 400 && static_cast<int>(out.size()) < count; ++attempt) {
+    const double u = d.u0 + a(rng) * (d.u1 - d.u0), v = d.v0 + a(rng) * (d.v1 - d.v0);
+    if (face.trimmed() && !face.trim->contains(u, v)) continue;
+    const nurbs::SurfaceD1 e = nurbs::derivatives_d1(face.surface, u, v);
+    const Vector3 n = e.Su.cross(e.Sv);
+    if (!(n.norm() > 0.0)) continue;
+    if (located.closest_point_on_boundary(e.S, margin).distance < margin) continue;
+    out.push_back({e.S, face.outward * n.normalized(), face.index});
+  }
+  return out;
+}
+
+TEST(ElementFaces, SparseTouchesOnPlanesAndCylindersAreFittedAsThoseAndOk) {
+  const cad::Model part = cad::read_model(test::kCadDir / "nist_stc_06_asme1_ap242-e3.stp");
+  // The largest plane and cylinder faces (by their NURBS's parameter area on the part: their extent), 12–20 points
+  // each.
+  std::mt19937_64 rng(31);
+  std::vector<simulation::ProgrammedPoint> plan;
+  int planes = 0, cylinders = 0;
+  for (const cad::Face& face : part.faces) {
+    if (!face.analytic) continue;
+    const cad::ElementaryKind kind = face.analytic->surface().kind;
+    const bool plane = kind == cad::ElementaryKind::Plane, cylinder = kind == cad::ElementaryKind::Cylinder;
+    if (!(plane && planes < 8) && !(cylinder && cylinders < 6)) continue;
+    const std::vector<simulation::ProgrammedPoint> p = sparse_plan(face, plane ? 16 : 14, 3.0, rng);
+    if (p.size() < 12) continue;
+    plan.insert(plan.end(), p.begin(), p.end());
+    planes += plane;
+    cylinders += cylinder;
+  }
+  ASSERT_GE(planes, 6);
+  ASSERT_GE(cylinders, 4);
+  const studies::SimulatedMeasurement m{
+      .nominal = part,
+      .deformation = {},
+      .placement = geometry::RigidTransform(Eigen::Translation3d(0.2, -0.1, 0.15) *
+                                            Eigen::AngleAxisd(0.008, Vector3(0.3, 1, 0.6).normalized())),
+      .plan = plan,
+      .probe_radius = 1.0,
+      .noise_sigma = 0.002,
+      .seed = 41};
+  const studies::MethodComparison r = studies::compare_methods(m, {.approach_normals = true});
+  int touched = 0, ok = 0, covered = 0, few = 0;
+  double ss = 0.0, worst = 0.0, u_sum = 0.0;
+  for (std::size_t k = 0; k < plan.size(); ++k) {
+    if (r.touches[k].status != simulation::Touch::Status::OK) continue;
+    ++touched;
+    const CompensatedPoint& c = r.cad.points[k];
+    few += c.status == PointStatus::FewPoints;
+    if (c.status != PointStatus::Ok) continue;
+    ++ok;
+    const double e = r.cad_error[k];
+    ss += e * e;
+    worst = std::max(worst, std::abs(e));
+    u_sum += c.uncertainty;
+    covered += std::abs(e) <= 2.0 * c.uncertainty;
+  }
+  std::printf("%d planes, %d cylinders: %d touches, %d ok (%d few-points); error rms %.2f um, largest %.2f um; mean u %.2f "
+              "um; within 2u %d\n",
+              planes, cylinders, touched, ok, few, std::sqrt(ss / std::max(ok, 1)) * 1e3, worst * 1e3,
+              u_sum / std::max(ok, 1) * 1e3, covered);
+  EXPECT_GE(ok, 0.95 * touched);
+  EXPECT_LT(worst, 0.012);  // 6 σ of the noise
+  EXPECT_GE(covered, 0.9 * ok);
+  EXPECT_LT(u_sum / std::max(ok, 1), 0.005);  // honest: about the noise, not the 9–80 µm of the nominal's normal
+}
+
+}  // namespace
+}  // namespace probecomp::compensation
