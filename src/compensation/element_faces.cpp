@@ -30,40 +30,27 @@ struct Fitted {
   bool ok = false;
 };
 
+// The element as ElementFaceFit holds it: the fit's status, point, axis (a plane's normal), radius and rms.
+Fitted as_element(cad::ElementaryKind kind, fitting::ElementFitStatus status, const Point3& point, const Vector3& axis,
+                  double radius, double rms, int parameters, std::size_t used) {
+  Fitted out;
+  out.ok = status == fitting::ElementFitStatus::OK;
+  out.e = {.kind = kind, .point = point, .axis = axis, .radius = radius, .rms = rms, .used = static_cast<int>(used),
+           .parameters = parameters};
+  return out;
+}
+
 Fitted fit_kind(cad::ElementaryKind kind, std::span<const Point3> pts) {
   Fitted out;
-  out.e.kind = kind;
-  out.e.used = static_cast<int>(pts.size());
-  switch (kind) {
-    case cad::ElementaryKind::Plane: {
-      const fitting::PlaneFit f = fitting::fit_plane(pts);
-      out.ok = f.status == fitting::ElementFitStatus::OK;
-      out.e.point = f.point;
-      out.e.axis = f.normal;
-      out.e.rms = f.rms;
-      out.e.parameters = 3;
-      break;
-    }
-    case cad::ElementaryKind::Cylinder: {
-      const fitting::CylinderFit f = fitting::fit_cylinder(pts);
-      out.ok = f.status == fitting::ElementFitStatus::OK;
-      out.e.point = f.axis_point;
-      out.e.axis = f.axis;
-      out.e.radius = f.radius;
-      out.e.rms = f.rms;
-      out.e.parameters = 5;
-      break;
-    }
-    case cad::ElementaryKind::Sphere: {
-      const fitting::SphereFit f = fitting::fit_sphere(pts);
-      out.ok = f.status == fitting::ElementFitStatus::OK;
-      out.e.point = f.center;
-      out.e.radius = f.radius;
-      out.e.rms = f.rms;
-      out.e.parameters = 4;
-      break;
-    }
-    default: break;
+  if (kind == cad::ElementaryKind::Plane) {
+    const fitting::PlaneFit f = fitting::fit_plane(pts);
+    out = as_element(kind, f.status, f.point, f.normal, 0.0, f.rms, 3, pts.size());
+  } else if (kind == cad::ElementaryKind::Cylinder) {
+    const fitting::CylinderFit f = fitting::fit_cylinder(pts);
+    out = as_element(kind, f.status, f.axis_point, f.axis, f.radius, f.rms, 5, pts.size());
+  } else if (kind == cad::ElementaryKind::Sphere) {
+    const fitting::SphereFit f = fitting::fit_sphere(pts);
+    out = as_element(kind, f.status, f.center, Vector3::Zero(), f.radius, f.rms, 4, pts.size());
   }
   // At least one degree of freedom more than the element has: else the fit passes through the points and says
   // nothing of the noise.
