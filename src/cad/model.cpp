@@ -1,5 +1,7 @@
 #include "probecomp/cad/model.hpp"
 
+#include "exchange.hpp"
+
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_NurbsConvert.hxx>
 #include <BRep_Builder.hxx>
@@ -325,23 +327,6 @@ std::string face_name(const Handle(XSControl_TransferReader)& tr, const TopoDS_F
   return {};
 }
 
-// OpenCASCADE's exchange settings are process-wide statics: set them once, and serialise reads.
-std::mutex& exchange_mutex() {
-  static std::mutex m;
-  return m;
-}
-
-void configure_exchange() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    // Quiet: our errors are our own one-line messages, not OpenCASCADE's trace on standard output.
-    Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_Printer));
-    IGESControl_Controller::Init();
-    // Every length read is converted to millimetres (OpenCASCADE's default, set here so it is not assumed).
-    Interface_Static::SetCVal("xstep.cascade.unit", "MM");
-  });
-}
-
 // What the exchange reader gives back: the shape, the transfer record (for face names) and the file's length unit.
 struct ExchangeRead {
   TopoDS_Shape shape;
@@ -438,6 +423,30 @@ ExchangeRead read_exchange_file(const std::filesystem::path& path, Format format
 }
 
 }  // namespace
+
+namespace detail {
+
+// OpenCASCADE's exchange settings are process-wide statics: set them once, and serialise reads.
+std::mutex& exchange_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+void configure_exchange() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    // Quiet: our errors are our own one-line messages, not OpenCASCADE's trace on standard output.
+    Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_Printer));
+    IGESControl_Controller::Init();
+    // Every length read is converted to millimetres (OpenCASCADE's default, set here so it is not assumed).
+    Interface_Static::SetCVal("xstep.cascade.unit", "MM");
+  });
+}
+
+}  // namespace detail
+
+using detail::configure_exchange;
+using detail::exchange_mutex;
 
 Model Model::load(const std::filesystem::path& path) { return read_model(path); }
 

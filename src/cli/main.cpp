@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
@@ -18,6 +19,7 @@
 
 #include "probecomp/cad/locator.hpp"
 #include "probecomp/cad/model.hpp"
+#include "probecomp/cad/pmi.hpp"
 #include "probecomp/cad/plan.hpp"
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
@@ -86,6 +88,9 @@ int run_selftest() {
 
 int run_info(const std::string& part, bool json) {
   const cad::Model model = cli::read_part(part);
+  // The file's semantic PMI (STEP AP242): geometric tolerances, their faces and datums.
+  const cad::Pmi pmi = cad::read_pmi(part, model);
+  for (const std::string& w : pmi.warnings) std::cerr << "probecomp: warning: " << part << ": " << w << '\n';
   int rational = 0, trimmed = 0, solid = 0;
   for (const cad::Face& f : model.faces) {
     rational += f.surface.is_rational();
@@ -116,7 +121,16 @@ int run_info(const std::string& part, bool json) {
                            {"faces", faces},
                            {"totals",
                             {{"faces", model.faces.size()}, {"rational", rational}, {"trimmed", trimmed}, {"in_solids", solid}}}};
-    out << io::json_text(info);
+    io::Json info_out = info;
+    io::Json tolerances = io::Json::array();
+    for (const cad::GeometricTolerance& t : pmi.tolerances) {
+      tolerances.push_back({{"type", cad::to_string(t.type)},
+                            {"value", t.value ? io::json_number(*t.value, 9) : io::Json(nullptr)},
+                            {"faces", t.faces},
+                            {"datums", t.datums}});
+    }
+    info_out["pmi"] = {{"datums", pmi.datums}, {"tolerances", tolerances}, {"warnings", pmi.warnings}};
+    out << io::json_text(info_out);
   } else {
     out << "# " << part << ": units mm (file: " << model.file_units << ")\n";
     out << "# face  type        degree  poles     rational  trimmed  material  bbox min (mm)  bbox max (mm)\n";
@@ -132,6 +146,23 @@ int run_info(const std::string& part, bool json) {
     }
     out << "total: " << model.faces.size() << " faces, " << rational << " rational, " << trimmed << " trimmed, " << solid
         << " on solids; units mm (file: " << model.file_units << ")\n";
+    if (!pmi.tolerances.empty()) {
+      std::map<std::string, int> by_type;
+      int unread = 0;
+      for (const cad::GeometricTolerance& t : pmi.tolerances) {
+        ++by_type[cad::to_string(t.type)];
+        unread += !t.value;
+      }
+      out << "PMI: " << pmi.tolerances.size() << " geometric tolerances (";
+      bool first = true;
+      for (const auto& [type, n] : by_type) {
+        out << (first ? "" : ", ") << n << ' ' << type;
+        first = false;
+      }
+      out << "), " << pmi.datums.size() << " datums";
+      if (unread > 0) out << "; " << unread << " magnitudes not read";
+      out << '\n';
+    }
   }
   std::cout << out.str();
   return 0;

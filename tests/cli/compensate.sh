@@ -78,6 +78,15 @@ check "[ \$(wc -l <'$W/conv.csv') -eq 7201 ]" "conventional to standard output"
 # fit: the measured surface as IGES, readable again.
 "$P" fit --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/actual.igs" --quiet || fail=1
 check "'$P' info '$W/actual.igs' | grep -q 'total: 1 faces'" "fit wrote one NURBS face"
+# info: a STEP AP242 file's semantic PMI; magnitudes OpenCASCADE does not read are named, not printed as 0.
+"$P" info "$CAD/nist_ftc_06_asme1_ap242-e2.stp" --json >"$W/ftc06.json" 2>"$W/ftc06.err" || { echo "FAIL: info ftc06"; fail=1; }
+json_check "$W/ftc06.json" "len(j['pmi']['tolerances']) == 27 and all(t['value'] > 0 for t in j['pmi']['tolerances'])" \
+  "info --json lists FTC-06's 27 tolerances with their magnitudes" || fail=1
+json_check "$W/ftc06.json" "sum(t['type'] == 'profile of surface' for t in j['pmi']['tolerances']) == 11" \
+  "info --json: FTC-06's 11 surface profiles" || fail=1
+"$P" info "$CAD/nist_ctc_02_asme1_ap242-e2.stp" >"$W/ctc02.txt" 2>"$W/ctc02.err" || { echo "FAIL: info ctc02"; fail=1; }
+check "grep -q 'PMI: 22 geometric tolerances.*22 magnitudes not read' '$W/ctc02.txt'" "info names CTC-02's unread magnitudes"
+check "[ \$(grep -c 'its magnitude was not read' '$W/ctc02.err') -eq 22 ]" "one warning for each unread magnitude"
 
 N="$W/demo/nominal.igs"
 printf 'x,y,z\n1,2,3\n4,nan,6\n' >"$W/nan.csv"

@@ -1,0 +1,39 @@
+#pragma once
+// The geometric tolerances and datums a STEP AP242 file carries as semantic PMI (GD&T), as OpenCASCADE's XDE reads
+// them, tied to the model's faces. A tolerance whose magnitude OpenCASCADE does not read (7.6 reads 0 where the file
+// stores it in a complex entity: NIST CTC-02) has none, and a warning names it: never a silent 0.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "probecomp/cad/model.hpp"
+
+namespace probecomp::cad {
+
+enum class ToleranceType {
+  Angularity, CircularRunout, Circularity, Coaxiality, Concentricity, Cylindricity, Flatness, Parallelism,
+  Perpendicularity, Position, ProfileOfLine, ProfileOfSurface, Straightness, Symmetry, TotalRunout, Other,
+};
+[[nodiscard]] const char* to_string(ToleranceType t);  // "profile of surface", ...
+
+struct GeometricTolerance {
+  ToleranceType type = ToleranceType::Other;
+  std::optional<double> value;      // the zone's width, mm; none where the file's could not be read
+  std::vector<int> faces;           // the toleranced faces (positions in the model's faces)
+  std::vector<std::string> datums;  // the datum reference frame, primary first (each name once)
+};
+
+struct Pmi {
+  std::vector<GeometricTolerance> tolerances;
+  std::vector<std::string> datums;    // every datum the file names, sorted, each once
+  std::vector<std::string> warnings;  // one line each: what could not be read
+};
+
+// Reads `path` (STEP) with OpenCASCADE's XDE and ties each tolerance to `model`'s faces, which must be the same
+// file's (Model::load). Empty for IGES and for a STEP file without PMI. Throws CadError where the file cannot be
+// read or its faces are not the model's.
+[[nodiscard]] Pmi read_pmi(const std::filesystem::path& path, const Model& model);
+
+}  // namespace probecomp::cad

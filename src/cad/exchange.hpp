@@ -1,0 +1,13 @@
+#pragma once
+// OpenCASCADE's exchange settings are process-wide statics: the readers of this layer (cad/model.cpp, cad/pmi.cpp)
+// set them once and read one file at a time. Private to cad/.
+
+#include <mutex>
+
+namespace probecomp::cad::detail {
+
+[[nodiscard]] std::mutex& exchange_mutex();
+// Quiet messages, IGES initialised, lengths in millimetres; once per process.
+void configure_exchange();
+
+}  // namespace probecomp::cad::detail
