@@ -11,7 +11,7 @@ packages=(
   libocct-foundation-dev        # OpenCASCADE: TKernel, TKMath
   libocct-modeling-data-dev     # OpenCASCADE: Geom_BSplineSurface, BRep
   libocct-modeling-algorithms-dev # OpenCASCADE: GeomAPI_ProjectPointOnSurf (reference)
-  libocct-data-exchange-dev     # OpenCASCADE: STEP and IGES readers and writers
+  libocct-data-exchange-dev     # OpenCASCADE: STEP and IGES readers and writers, XDE (STEP PMI; pulls in OCAF)
   libnanoflann-dev              # k-d tree for nearest seeds
   libcli11-dev                  # command line
   libpugixml-dev                # XML: QIF 3.0 point files in and out
