@@ -12,6 +12,8 @@
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "probecomp/cad/model.hpp"
+#include "probecomp/cad/pmi.hpp"
+#include "probecomp/inspection/characteristics.hpp"
 #include "probecomp/compensation/conventional.hpp"
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/geometry/stopwatch.hpp"
@@ -155,7 +157,7 @@ compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Met
 // The write step: the points (CSV, DMIS or QIF, by the extension), the report and the statistics, all or none
 // (standard output last, once every file is in place).
 void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation::CompensationResult& r,
-                   io::ProgressBar& bar) {
+                   std::span<const inspection::CharacteristicResult> characteristics, io::ProgressBar& bar) {
   bar.update("writing", 1.0 - kWriteShare);
   const Stopwatch clock;
   // CSV, the usual output of a scan, goes to its file block by block; DMIS and QIF are built whole.
@@ -184,7 +186,7 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
     }
     files.add(a.report, results::html_report(r, context));
   }
-  if (!a.json.empty()) files.add(a.json, results::statistics_json(r, l.inputs, timings, tolerance));
+  if (!a.json.empty()) files.add(a.json, results::statistics_json(r, l.inputs, timings, tolerance, characteristics));
   files.commit();
   if (a.output.empty()) results::write_compensated_csv(std::cout, l.table, r);
   bar.update("done", 1.0);
@@ -200,13 +202,46 @@ void print_summary_row(std::ostream& out, const char* name, const studies::Error
 
 int run_compensate(const CompensateArgs& a) {
   io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}, {"--report", a.report}},
-                                 {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform}});
+                                 {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform},
+                                  {"--characteristics", a.characteristics == "pmi" ? std::string() : a.characteristics}});
   if (!a.tolerance.empty()) (void)tolerance_band(a.tolerance);  // a bad band fails before the run
   io::ProgressBar bar(a.quiet);
   const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform, bar);
+  // The characteristics are read before the run, so that a bad specification fails before it.
+  inspection::Specification spec;
+  if (a.characteristics == "pmi") {
+    const cad::Pmi pmi = cad::read_pmi(a.cad, l.model);
+    for (const std::string& w : pmi.warnings) bar.print("probecomp: warning: " + a.cad + ": " + w);
+    int skipped = 0;
+    spec = inspection::from_pmi(pmi, skipped);
+    if (spec.characteristics.empty()) {
+      throw std::invalid_argument("--characteristics pmi: " + a.cad + " states no surface profile or flatness" +
+                                  (pmi.tolerances.empty() ? " (no semantic PMI: STEP AP242 carries it)" : ""));
+    }
+    if (skipped > 0) {
+      bar.print("probecomp: warning: " + std::to_string(skipped) + " of the file's tolerances are not surface profiles " +
+                "or flatness and are not evaluated");
+    }
+  } else if (!a.characteristics.empty()) {
+    spec = inspection::read_specification(a.characteristics, l.model);
+  }
   const compensation::Method method = a.method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
   const compensation::CompensationResult r = run_pipeline(l, method, a.accept_doubtful_registration, bar);
-  write_outputs(a, l, r, bar);
+  const std::vector<inspection::CharacteristicResult> judged = inspection::evaluate(spec, l.model, r);
+  // One line each on standard error, even with --quiet: the decisions are what the run was for.
+  for (const inspection::CharacteristicResult& c : judged) {
+    std::string line = "probecomp: " + c.spec.name + ": " + inspection::to_string(c.decision);
+    if (c.decision == inspection::Decision::NotEvaluated) {
+      line += " (" + c.reason + ")";
+    } else {
+      char figures[160];
+      std::snprintf(figures, sizeof figures, " (value %.4f mm, U %.4f mm, tolerance %.4f mm, %d points)", c.value, c.u,
+                    c.spec.tolerance, c.points);
+      line += figures;
+    }
+    bar.print(line);
+  }
+  write_outputs(a, l, r, judged, bar);
   return 0;
 }
 

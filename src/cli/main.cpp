@@ -399,6 +399,9 @@ int main(int argc, char** argv) {
   compensate->add_option("--tolerance", comp.tolerance,
                          "LOWER,UPPER: the deviation tolerance band, mm (e.g. -0.05,0.05): out-of-tolerance counts per "
                          "face and overall in --report and --json");
+  compensate->add_option("--characteristics", comp.characteristics,
+                         "Judge the drawing's characteristics: SPEC.json (datums and surface profiles, mm), or pmi for "
+                         "the STEP AP242 file's own; decisions with U = 2u (ISO 14253-1) on standard error and in --json");
   compensate->add_flag("--quiet", comp.quiet, "No progress on standard error");
 
   cli::FitArgs fit_args;

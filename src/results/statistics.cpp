@@ -79,7 +79,8 @@ DeviationSummaries summarise_deviations(const compensation::CompensationResult& 
 }
 
 std::string statistics_json(const compensation::CompensationResult& r, const RunInputs& inputs,
-                            const FileTimings& files, const std::optional<Tolerance>& tolerance) {
+                            const FileTimings& files, const std::optional<Tolerance>& tolerance,
+                            std::span<const inspection::CharacteristicResult> characteristics) {
   const DeviationSummaries dev = summarise_deviations(r, tolerance);
   const auto number = [](double v) { return json_number(v, 9); };
   const auto vec = [&](const Vector3& v) { return Json::array({number(v.x()), number(v.y()), number(v.z())}); };
@@ -183,6 +184,29 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
     all["out_of_tolerance"] = dev.all.out_of_tolerance;
   }
   j["deviation"] = all;
+  if (!characteristics.empty()) {
+    Json list = Json::array();
+    for (const inspection::CharacteristicResult& c : characteristics) {
+      Json x = {{"name", c.spec.name},
+                {"type", c.spec.type},
+                {"faces", c.spec.faces},
+                {"datums", c.spec.datums},
+                {"tolerance", number(c.spec.tolerance)},
+                {"outside", number(c.outside)},
+                {"points", c.points},
+                {"decision", inspection::to_string(c.decision)}};
+      if (c.decision == inspection::Decision::NotEvaluated) {
+        x["reason"] = c.reason;
+      } else {
+        x["min"] = number(c.min);
+        x["max"] = number(c.max);
+        x["value"] = number(c.value);
+        x["u"] = number(c.u);
+      }
+      list.push_back(x);
+    }
+    j["characteristics"] = list;
+  }
   j["warnings"] = r.warnings;
   const compensation::Timings& t = r.seconds;
   const auto seconds = [](double v) { return json_fixed(v, 4); };

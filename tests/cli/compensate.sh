@@ -78,6 +78,19 @@ check "[ \$(wc -l <'$W/conv.csv') -eq 7201 ]" "conventional to standard output"
 # fit: the measured surface as IGES, readable again.
 "$P" fit --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/actual.igs" --quiet || fail=1
 check "'$P' info '$W/actual.igs' | grep -q 'total: 1 faces'" "fit wrote one NURBS face"
+# --characteristics: a surface profile without datums on the demo's panel (its form after a best fit of its own
+# points: the dent and bulge, about 2 mm wide a zone), judged with U = 2u; with datums, not evaluated and why; pmi on
+# an IGES file, refused.
+printf '{"datums": {"A": {"faces": [0]}}, "characteristics": [{"name": "P1", "faces": [0], "tolerance": 3.0},
+  {"name": "P2", "faces": [0], "tolerance": 0.001}, {"name": "P3", "faces": [0], "tolerance": 0.3, "datums": ["A"]}]}' >"$W/spec.json"
+"$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 --characteristics "$W/spec.json" \
+  --output "$W/spec.csv" --json "$W/spec_stats.json" --quiet 2>"$W/spec.err" || { echo "FAIL: --characteristics"; fail=1; }
+json_check "$W/spec_stats.json" "[c['decision'] for c in j['characteristics']] == ['conforms', 'does-not-conform', 'not-evaluated']" \
+  "--characteristics: a wide zone conforms, a 1 um one does not, one with datums is not evaluated" || fail=1
+json_check "$W/spec_stats.json" "abs(j['characteristics'][0]['value'] - 2 * max(-j['characteristics'][0]['min'], j['characteristics'][0]['max'])) < 1e-6 and j['characteristics'][0]['points'] == 7200" \
+  "--characteristics: the profile's value, the centred zone holding all 7 200 points" || fail=1
+check "grep -q 'probecomp: P3: not-evaluated (datum reference frames' '$W/spec.err'" "--characteristics: the reason on standard error"
+expect_error "no semantic PMI" "$W/pmi.csv" "$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 --characteristics pmi --output "$W/pmi.csv"
 # info: a STEP AP242 file's semantic PMI; magnitudes OpenCASCADE does not read are named, not printed as 0.
 "$P" info "$CAD/nist_ftc_06_asme1_ap242-e2.stp" --json >"$W/ftc06.json" 2>"$W/ftc06.err" || { echo "FAIL: info ftc06"; fail=1; }
 json_check "$W/ftc06.json" "len(j['pmi']['tolerances']) == 27 and all(t['value'] > 0 for t in j['pmi']['tolerances'])" \

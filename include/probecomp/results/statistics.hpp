@@ -3,11 +3,13 @@
 // optional tolerance, and all of it as the JSON statistics (DESIGN.md §5; read by the report and the Python package).
 
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/inspection/characteristics.hpp"
 #include "probecomp/io/point_table.hpp"
 
 namespace probecomp::results {
@@ -63,8 +65,10 @@ struct DeviationSummaries {
 // (read, prepare, register, fit, compensate, write, total). Lengths in mm, whatever the points' unit.
 // With a tolerance: it, and each face's and the whole run's count of trusted points outside it; each face's trusted
 // deviations (mean, std, min, max) in any case.
+// With characteristics (inspection/characteristics.hpp): their results under "characteristics" (DESIGN.md §7's keys).
 [[nodiscard]] std::string statistics_json(const compensation::CompensationResult& result, const RunInputs& inputs,
                                           const FileTimings& timings,
-                                          const std::optional<Tolerance>& tolerance = std::nullopt);
+                                          const std::optional<Tolerance>& tolerance = std::nullopt,
+                                          std::span<const inspection::CharacteristicResult> characteristics = {});
 
 }  // namespace probecomp::results

@@ -1,0 +1,152 @@
+// Characteristics judged on compensated points against closed-form truth: a plate whose actual shape is twisted
+// (one corner raised by h: z = h·s·t over the unit square of its parameters) measured against its flat nominal. The
+// least-squares plane of z = h·s·t on a symmetric grid is h(s + t)/2 − h/4, so its form deviation is
+// h(s − ½)(t − ½) and the flatness (a surface profile without datums) is h/2 over the grid's extreme points.
+
+#include "probecomp/inspection/characteristics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+
+#include "probecomp/error.hpp"
+#include "probecomp/simulation/measure.hpp"
+#include "support/data_files.hpp"
+
+namespace probecomp::inspection {
+namespace {
+
+cad::Model plate(double raised_corner) {
+  const nurbs::KnotVector U = nurbs::KnotVector::uniform(1, 1), V = nurbs::KnotVector::uniform(1, 1);
+  cad::Model m;
+  m.file_units = "mm";
+  m.faces.push_back(cad::Face{.surface = nurbs::Surface(U, V, std::vector<Point3>{Point3(0, 0, 0), Point3(0, 40, 0), Point3(60, 0, 0),
+                                                                                  Point3(60, 40, raised_corner)})});
+  return m;
+}
+
+struct Measured {
+  cad::Model nominal = plate(0.0);
+  compensation::CompensationResult result;
+  double grid_extent = 0.0;  // s and t of the grid's outer points run over [a, 1 − a]
+};
+
+// A 9 × 7 grid over the twisted plate (h = `h`), σ = 0.3 µm, compensated against the flat plate.
+Measured measure(double h) {
+  Measured out;
+  const cad::Model actual = plate(h);
+  std::vector<simulation::ProgrammedPoint> plan;
+  out.grid_extent = 0.1;
+  for (int i = 0; i < 9; ++i) {
+    for (int j = 0; j < 7; ++j) {
+      const double s = 0.1 + 0.8 * i / 8.0, t = 0.1 + 0.8 * j / 6.0;
+      plan.push_back({Point3(60.0 * s, 40.0 * t, 0.0), Vector3::UnitZ(), 0});
+    }
+  }
+  const std::vector<simulation::Touch> touches =
+      simulation::simulate_touches(cad::ModelLocator(actual), plan, {.probe_radius = 1.0, .noise_sigma = 0.0003, .seed = 5});
+  std::vector<Point3> centres;
+  std::vector<Vector3> normals;
+  for (std::size_t k = 0; k < touches.size(); ++k) {
+    centres.push_back(touches[k].measured);
+    normals.push_back(plan[k].normal);
+  }
+  compensation::CompensateOptions options;
+  options.probe_radius = 1.0;
+  out.result = compensation::compensate(out.nominal, centres, normals, options);
+  return out;
+}
+
+Specification flatness(double t) {
+  return {.characteristics = {{.name = "F1", .faces = {0}, .tolerance = t}}};
+}
+
+TEST(Characteristics, AFlatnessIsTheTwistsHalfHeightAndItsDecisionFollowsTheZone) {
+  constexpr double h = 0.04;
+  const Measured m = measure(h);
+  // The grid's extreme points sit at s, t = 0.1 and 0.9: h(s − ½)(t − ½) spans ±0.16 h, a width of 0.32 h.
+  const double truth = 2.0 * 0.16 * h;
+  const CharacteristicResult wide = evaluate(flatness(0.03), m.nominal, m.result).at(0);
+  std::printf("flatness %.2f um (truth %.2f um), u %.2f um, %d points, min %.2f max %.2f um: %s\n", wide.value * 1e3,
+              truth * 1e3, wide.u * 1e3, wide.points, wide.min * 1e3, wide.max * 1e3, to_string(wide.decision));
+  EXPECT_EQ(wide.points, 63);
+  EXPECT_NEAR(wide.value, truth, 0.002);
+  EXPECT_NEAR(wide.min, -0.16 * h, 0.001);
+  EXPECT_NEAR(wide.max, 0.16 * h, 0.001);
+  EXPECT_EQ(wide.decision, Decision::Conforms);
+  // A zone narrower than the form by more than U: does not conform.
+  EXPECT_EQ(evaluate(flatness(0.008), m.nominal, m.result).at(0).decision, Decision::DoesNotConform);
+  // A zone exactly the measured value: its extreme point sits on the limit, its ±U across it.
+  EXPECT_EQ(evaluate(flatness(wide.value), m.nominal, m.result).at(0).decision, Decision::Indeterminate);
+}
+
+TEST(Characteristics, WithDatumsOrTooFewPointsTheyAreNotEvaluatedWithTheReason) {
+  const Measured m = measure(0.02);
+  Specification s = flatness(0.05);
+  s.characteristics[0].datums = {"A"};
+  const CharacteristicResult with_datums = evaluate(s, m.nominal, m.result).at(0);
+  EXPECT_EQ(with_datums.decision, Decision::NotEvaluated);
+  EXPECT_NE(with_datums.reason.find("datum"), std::string::npos);
+  // Six trusted points cannot show a form past the six motions of a best fit.
+  compensation::CompensationResult few = m.result;
+  for (std::size_t k = 6; k < few.points.size(); ++k) few.points[k].status = compensation::PointStatus::Outlier;
+  const CharacteristicResult sparse = evaluate(flatness(0.05), m.nominal, few).at(0);
+  EXPECT_EQ(sparse.decision, Decision::NotEvaluated);
+  EXPECT_EQ(sparse.points, 6);
+  EXPECT_NE(sparse.reason.find("6 trusted points"), std::string::npos) << sparse.reason;
+}
+
+TEST(Characteristics, ABadSpecificationIsRefusedNamingTheFileAndTheCause) {
+  const cad::Model model = plate(0.0);
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / "probecomp_spec_test.json";
+  auto refused = [&](const std::string& text, const std::string& cause) {
+    std::ofstream(path) << text;
+    try {
+      (void)read_specification(path, model);
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(cause), std::string::npos) << e.what();
+    }
+  };
+  refused("{", "not JSON");
+  refused(R"({"characteristics": [{"faces": [0]}]})", "no \"tolerance\"");
+  refused(R"({"characteristics": [{"faces": [0], "tolerance": -1}]})", "must be positive");
+  refused(R"({"characteristics": [{"faces": [3], "tolerance": 0.1}]})", "face 3 is not in the model");
+  refused(R"({"characteristics": [{"faces": [0], "tolerance": 0.1, "datums": ["A"]}]})", "datum A is not defined");
+  refused(R"({"characteristics": [{"type": "position", "faces": [0], "tolerance": 0.1}]})", "unknown type");
+  std::ofstream(path) << R"({"datums": {"A": {"faces": [0]}}, "characteristics": [{"name": "P", "faces": [0], "tolerance": 0.1, "outside": 0.02, "datums": ["A"]}]})";
+  const Specification s = read_specification(path, model);
+  ASSERT_EQ(s.characteristics.size(), 1u);
+  EXPECT_EQ(s.characteristics[0].name, "P");
+  EXPECT_DOUBLE_EQ(*s.characteristics[0].outside, 0.02);
+  std::filesystem::remove(path);
+}
+
+// NIST FTC-06's PMI as characteristics: its 11 profiles of surface (with their datums) and 3 flatnesses (none); its
+// 13 positions and perpendicularities are not characteristics of this step, and are counted.
+TEST(Characteristics, FromPmiTakesTheProfilesAndFlatnesses) {
+  const std::filesystem::path file = test::kCadDir / "nist_ftc_06_asme1_ap242-e2.stp";
+  const cad::Model model = cad::read_model(file);
+  int skipped = 0;
+  const Specification s = from_pmi(cad::read_pmi(file, model), skipped);
+  EXPECT_EQ(s.characteristics.size(), 14u);
+  EXPECT_EQ(skipped, 13);
+  int flatness = 0;
+  for (const CharacteristicSpec& c : s.characteristics) {
+    EXPECT_GT(c.tolerance, 0.0);
+    EXPECT_FALSE(c.faces.empty());
+    if (c.name.starts_with("flatness")) {
+      ++flatness;
+      EXPECT_TRUE(c.datums.empty());
+      EXPECT_NEAR(c.tolerance, 0.254, 1e-9);
+    } else {
+      EXPECT_FALSE(c.datums.empty()) << c.name;
+    }
+  }
+  EXPECT_EQ(flatness, 3);
+}
+
+}  // namespace
+}  // namespace probecomp::inspection
