@@ -165,9 +165,13 @@ std::vector<CharacteristicResult> evaluate(const Specification& spec, const cad:
     c.min = std::numeric_limits<double>::infinity();
     c.max = -std::numeric_limits<double>::infinity();
     bool inside = true, outside_surely = false;
+    // A point whose foot fell on its faces' edge after the fit is past them (its distance is not along a normal):
+    // left out, and not counted.
+    c.points = 0;
     for (std::size_t k = 0; k < points.size(); ++k) {
       const registration::PointMatch& m = fit.matches[k];
-      if (!m.ok()) continue;
+      if (!m.ok() || m.on_edge) continue;
+      ++c.points;
       const double d = m.distance, U = 2.0 * u[k];
       c.min = std::min(c.min, d);
       c.max = std::max(c.max, d);
@@ -178,6 +182,12 @@ std::vector<CharacteristicResult> evaluate(const Specification& spec, const cad:
       }
       inside = inside && d - U >= c.outside - s.tolerance && d + U <= c.outside;
       outside_surely = outside_surely || d - U > c.outside || d + U < c.outside - s.tolerance;
+    }
+    if (c.points < kMinPointsForForm) {
+      c.reason = "after the best fit only " + std::to_string(c.points) + " of its points lie inside its faces";
+      c.decision = Decision::NotEvaluated;
+      out.push_back(std::move(c));
+      continue;
     }
     c.decision = outside_surely ? Decision::DoesNotConform : inside ? Decision::Conforms : Decision::Indeterminate;
     out.push_back(std::move(c));

@@ -14,6 +14,7 @@
 #include "support/occt_files.hpp"
 #include "support/test_surfaces.hpp"
 #include "support/data_files.hpp"
+#include "support/light.hpp"
 
 namespace probecomp::cad {
 namespace {
@@ -45,6 +46,10 @@ class EveryCadFile : public ::testing::TestWithParam<CadFile> {};
 
 TEST_P(EveryCadFile, LoadsWithOpenCascadesFacesAndGeometry) {
   const CadFile& file = GetParam();
+  // The sanitizer build reads one NIST part, the one with unclamped B-splines; Release reads all five.
+  if (test::kLight && std::string(file.name).starts_with("nist_") && std::string(file.name) != "nist_stc_06_asme1_ap242-e3.stp") {
+    GTEST_SKIP() << "the Release run reads it";
+  }
   const Model model = read_model(kCadDir / file.name);
   const std::vector<TopoDS_Face> reference = occt_faces(kCadDir / file.name);
   ASSERT_EQ(model.faces.size(), reference.size());

@@ -279,7 +279,7 @@ OpeningCounts touch_across_opening(const TrimmedPanel& part, bool plan_follows_p
 // Both plans (following the part, in the CAD frame): at least `rim_touches` touches meet the opening's edge, 90 % of
 // them within 2u of the part, and no ok row more than 20 µm from its true contact.
 void expect_opening_edges_flagged(const TrimmedPanel& part, int rim_touches) {
-  for (const bool follows : {true, false}) {
+  for (const bool follows : test::cases({true, false})) {
     SCOPED_TRACE(follows ? "plan follows the part" : "plan in the CAD frame");
     const OpeningCounts n = touch_across_opening(part, follows);
     EXPECT_GE(n.rim, rim_touches);
