@@ -228,14 +228,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
   // is the fits' estimate (their median over the fitted faces), not the registration's residual scale, which
   // holds the part's deformation too: that is what the deviations measure, not an uncertainty of where the
   // model sits.
-  double noise = registration.scale;
-  {
-    std::vector<double> fitted_noise;
-    for (const FaceFit& ff : fits.faces) {
-      if (ff.report.fitted) fitted_noise.push_back(ff.fit->noise_sigma);
-    }
-    if (!fitted_noise.empty()) noise = geometry::median_in_place(fitted_noise);
-  }
+  const double noise = fitted_noise.value_or(registration.scale);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, raw.size(), 4096), [&](const auto& range) {
     for (std::size_t k = range.begin(); k != range.end(); ++k) {
       CompensatedPoint& c = out[k];

@@ -212,7 +212,35 @@ TrimmedPanel panel_with_notch(double a, double width, double depth) {
 
 struct OpeningCounts {
   int rim = 0, rim_good = 0, rim_flagged = 0, bad_ok = 0;
+  double worst_ok = 0.0;  // mm
 };
+
+// The `ok` rows from row `ok_from` on that are more than 20 µm from their true contact (and the farthest), and from row
+// `rim_from` on, the touches whose true contact is on an edge: those within 2u of the actual part (flagged `edge`,
+// or, at the very edge where a face and its rim meet, `ok` with the contact on the face).
+OpeningCounts count_rows(const studies::SimulatedMeasurement& m, const studies::MethodComparison& r, std::size_t ok_from,
+                         std::size_t rim_from) {
+  const cad::Model actual = simulation::actual_model(m.nominal, m.deformation, m.placement);
+  const cad::ModelLocator located(actual);
+  OpeningCounts n;
+  for (std::size_t k = std::min(ok_from, rim_from); k < m.plan.size(); ++k) {
+    const CompensatedPoint& c = r.cad.points[k];
+    const simulation::Touch& t = r.touches[k];
+    if (t.status == simulation::Touch::Status::Missed) continue;
+    if (k >= ok_from && c.status == PointStatus::Ok) {
+      const double e = (c.contact - t.contact).norm();
+      n.worst_ok = std::max(n.worst_ok, e);
+      n.bad_ok += e > 0.02;
+    }
+    if (k < rim_from || t.status != simulation::Touch::Status::Edge) continue;
+    ++n.rim;
+    const cad::ModelPoint foot = located.closest_point(c.contact);
+    const bool within = foot.ok() && std::abs(foot.distance) <= 2.0 * c.uncertainty;
+    n.rim_flagged += c.status == PointStatus::Edge && within;
+    n.rim_good += (c.status == PointStatus::Edge || c.status == PointStatus::Ok) && within;
+  }
+  return n;
+}
 
 // The panel's grid clear of the opening, then 15 touches at each station from 0.5 mm over the opening to 0.9 mm into
 // the material, approached along the surface's normal there. Placed 2° and 0.5 mm off, the plan following the part
@@ -251,28 +279,9 @@ OpeningCounts touch_across_opening(const TrimmedPanel& part, bool plan_follows_p
   const studies::SimulatedMeasurement m{
       .nominal = part.model, .deformation = {}, .placement = placement, .plan = plan, .probe_radius = 1.0, .noise_sigma = 0.002, .seed = 13};
   const studies::MethodComparison r = studies::compare_methods(m, {.approach_normals = true});
-  const cad::Model actual = simulation::actual_model(part.model, m.deformation, m.placement);
-  const cad::ModelLocator located(actual);
-  OpeningCounts n;
-  double worst_ok = 0.0;
-  for (std::size_t k = interior; k < plan.size(); ++k) {
-    const CompensatedPoint& c = r.cad.points[k];
-    const simulation::Touch& t = r.touches[k];
-    if (t.status == simulation::Touch::Status::Missed) continue;
-    if (c.status == PointStatus::Ok) {
-      const double e = (c.contact - t.contact).norm();
-      worst_ok = std::max(worst_ok, e);
-      n.bad_ok += e > 0.02;
-    }
-    if (t.status != simulation::Touch::Status::Edge) continue;
-    ++n.rim;
-    const cad::ModelPoint foot = located.closest_point(c.contact);
-    const bool within = foot.ok() && std::abs(foot.distance) <= 2.0 * c.uncertainty;
-    n.rim_flagged += c.status == PointStatus::Edge && within;
-    n.rim_good += (c.status == PointStatus::Edge || c.status == PointStatus::Ok) && within;
-  }
+  const OpeningCounts n = count_rows(m, r, interior, interior);
   std::printf("rim touches %d, within 2u %d (flagged %d); ok rows more than 20 um off %d (worst %.1f um)\n", n.rim,
-              n.rim_good, n.rim_flagged, n.bad_ok, worst_ok * 1e3);
+              n.rim_good, n.rim_flagged, n.bad_ok, n.worst_ok * 1e3);
   return n;
 }
 
@@ -392,37 +401,21 @@ TEST(EdgeRows, AnOpenShellsEdgesAreFlaggedAndNoOkRowIsFarOff) {
   const studies::SimulatedMeasurement m{
       .nominal = part, .deformation = {}, .placement = placement, .plan = run, .probe_radius = 1.0, .noise_sigma = 0.002, .seed = 17};
   const studies::MethodComparison r = studies::compare_methods(m, {.approach_normals = true});
-  const cad::Model actual = simulation::actual_model(part, m.deformation, m.placement);
-  const cad::ModelLocator located(actual);
-  int rim = 0, rim_good = 0, rim_flagged = 0, bad_ok = 0, interior_ok = 0;
-  double worst_ok = 0.0, interior_ss = 0.0;
-  for (std::size_t k = 0; k < run.size(); ++k) {
-    const CompensatedPoint& c = r.cad.points[k];
-    const simulation::Touch& t = r.touches[k];
-    if (t.status == simulation::Touch::Status::Missed) continue;
-    if (c.status == PointStatus::Ok) {
-      const double e = (c.contact - t.contact).norm();
-      worst_ok = std::max(worst_ok, e);
-      bad_ok += e > 0.02;
-      if (k < interior) {
-        ++interior_ok;
-        interior_ss += r.cad_error[k] * r.cad_error[k];
-      }
-    }
-    if (k < interior || t.status != simulation::Touch::Status::Edge) continue;
-    ++rim;
-    const cad::ModelPoint foot = located.closest_point(c.contact);
-    const bool within = foot.ok() && std::abs(foot.distance) <= 2.0 * c.uncertainty;
-    rim_flagged += c.status == PointStatus::Edge && within;
-    rim_good += (c.status == PointStatus::Edge || c.status == PointStatus::Ok) && within;
+  const OpeningCounts n = count_rows(m, r, 0, interior);
+  int interior_ok = 0;
+  double interior_ss = 0.0;
+  for (std::size_t k = 0; k < interior; ++k) {
+    if (r.touches[k].status == simulation::Touch::Status::Missed || r.cad.points[k].status != PointStatus::Ok) continue;
+    ++interior_ok;
+    interior_ss += r.cad_error[k] * r.cad_error[k];
   }
   std::printf("open shell: rim touches %d, within 2u %d (flagged %d); ok rows more than 20 um off %d (worst %.1f um); "
               "interior ok rows %d of %zu, rms error %.2f um\n",
-              rim, rim_good, rim_flagged, bad_ok, worst_ok * 1e3, interior_ok, interior,
+              n.rim, n.rim_good, n.rim_flagged, n.bad_ok, n.worst_ok * 1e3, interior_ok, interior,
               std::sqrt(interior_ss / std::max(interior_ok, 1)) * 1e3);
-  EXPECT_GE(rim, 250);  // of 1 200 touches, about 5 a station
-  EXPECT_GE(rim_good, 0.9 * rim);
-  EXPECT_EQ(bad_ok, 0);
+  EXPECT_GE(n.rim, 250);  // of 1 200 touches, about 5 a station
+  EXPECT_GE(n.rim_good, 0.9 * n.rim);
+  EXPECT_EQ(n.bad_ok, 0);
 }
 
 }  // namespace
