@@ -157,7 +157,7 @@ compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Met
 // The write step: the points (CSV, DMIS or QIF, by the extension), the report and the statistics, all or none
 // (standard output last, once every file is in place).
 void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation::CompensationResult& r,
-                   std::span<const inspection::CharacteristicResult> characteristics, io::ProgressBar& bar) {
+                   const inspection::Inspection& inspection, io::ProgressBar& bar) {
   bar.update("writing", 1.0 - kWriteShare);
   const Stopwatch clock;
   // CSV, the usual output of a scan, goes to its file block by block; DMIS and QIF are built whole.
@@ -186,7 +186,7 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
     }
     files.add(a.report, results::html_report(r, context));
   }
-  if (!a.json.empty()) files.add(a.json, results::statistics_json(r, l.inputs, timings, tolerance, characteristics));
+  if (!a.json.empty()) files.add(a.json, results::statistics_json(r, l.inputs, timings, tolerance, &inspection));
   files.commit();
   if (a.output.empty()) results::write_compensated_csv(std::cout, l.table, r);
   bar.update("done", 1.0);
@@ -227,9 +227,9 @@ int run_compensate(const CompensateArgs& a) {
   }
   const compensation::Method method = a.method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
   const compensation::CompensationResult r = run_pipeline(l, method, a.accept_doubtful_registration, bar);
-  const std::vector<inspection::CharacteristicResult> judged = inspection::evaluate(spec, l.model, r);
+  const inspection::Inspection judged = inspection::evaluate(spec, l.model, r);
   // One line each on standard error, even with --quiet: the decisions are what the run was for.
-  for (const inspection::CharacteristicResult& c : judged) {
+  for (const inspection::CharacteristicResult& c : judged.characteristics) {
     std::string line = "probecomp: " + c.spec.name + ": " + inspection::to_string(c.decision);
     if (c.decision == inspection::Decision::NotEvaluated) {
       line += " (" + c.reason + ")";

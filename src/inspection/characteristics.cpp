@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -10,14 +11,11 @@
 
 #include "probecomp/cad/locator.hpp"
 #include "probecomp/error.hpp"
-#include "probecomp/registration/icp.hpp"
+#include "restricted_fit.hpp"
 
 namespace probecomp::inspection {
 
 namespace {
-
-// Form only: at least this many points past the 6 motions a rigid fit may take.
-constexpr int kMinPointsForForm = 7;
 
 [[noreturn]] void bad(const std::filesystem::path& path, const std::string& why) {
   throw InputError(path.string() + ": " + why);
@@ -47,12 +45,41 @@ Specification read_specification(const std::filesystem::path& path, const cad::M
   if (!j.is_object() || !j.contains("characteristics") || !j["characteristics"].is_array()) {
     bad(path, "expected an object with a \"characteristics\" array");
   }
+  auto read_faces = [&](const nlohmann::json& faces, const std::string& where) {
+    if (!faces.is_array() || faces.empty()) bad(path, where + ": no \"faces\"");
+    std::vector<int> out;
+    for (const nlohmann::json& f : faces) {
+      const int face = f.get<int>();
+      if (face < 0 || face >= model.face_count()) {
+        bad(path, where + ": face " + std::to_string(face) + " is not in the model (" + std::to_string(model.face_count()) + " faces)");
+      }
+      out.push_back(face);
+    }
+    return out;
+  };
+  Specification spec;
   std::set<std::string> datums;
   if (j.contains("datums")) {
     if (!j["datums"].is_object()) bad(path, "\"datums\" must be an object of named datums");
-    for (const auto& [name, d] : j["datums"].items()) datums.insert(name);
+    for (const auto& [name, d] : j["datums"].items()) {
+      const std::string where = "datum " + name;
+      try {
+        if (!d.is_object() || !d.contains("faces")) bad(path, where + ": no \"faces\"");
+        DatumSpec datum{.name = name, .faces = read_faces(d["faces"], where)};
+        const std::string fit = d.value("fit", std::string("least-squares"));
+        if (fit == "tangent") {
+          datum.fit = DatumFit::Tangent;
+        } else if (fit != "least-squares") {
+          bad(path, where + ": unknown fit \"" + fit + "\" (expected least-squares or tangent)");
+        }
+        spec.datums.push_back(std::move(datum));
+      } catch (const nlohmann::json::exception& e) {
+        bad(path, where + ": " + e.what());
+      }
+      datums.insert(name);
+    }
   }
-  Specification spec;
+  if (j.contains("alignment")) bad(path, "\"alignment\" (the output in a datum frame) is not supported yet");
   int k = 0;
   for (const nlohmann::json& c : j["characteristics"]) {
     ++k;
@@ -62,14 +89,8 @@ Specification read_specification(const std::filesystem::path& path, const cad::M
       s.name = c.value("name", "C" + std::to_string(k));
       s.type = c.value("type", std::string("surface-profile"));
       if (s.type != "surface-profile") bad(path, where + ": unknown type \"" + s.type + "\" (expected surface-profile)");
-      if (!c.contains("faces") || !c["faces"].is_array() || c["faces"].empty()) bad(path, where + ": no \"faces\"");
-      for (const nlohmann::json& f : c["faces"]) {
-        const int face = f.get<int>();
-        if (face < 0 || face >= model.face_count()) {
-          bad(path, where + ": face " + std::to_string(face) + " is not in the model (" + std::to_string(model.face_count()) + " faces)");
-        }
-        s.faces.push_back(face);
-      }
+      if (!c.contains("faces")) bad(path, where + ": no \"faces\"");
+      s.faces = read_faces(c["faces"], where);
       if (!c.contains("tolerance")) bad(path, where + ": no \"tolerance\"");
       s.tolerance = c["tolerance"].get<double>();
       if (!(s.tolerance > 0.0) || !std::isfinite(s.tolerance)) bad(path, where + ": the tolerance must be positive (mm)");
@@ -112,53 +133,75 @@ Specification from_pmi(const cad::Pmi& pmi, int& skipped) {
   return spec;
 }
 
-std::vector<CharacteristicResult> evaluate(const Specification& spec, const cad::Model& nominal,
-                                           const compensation::CompensationResult& result) {
-  std::vector<CharacteristicResult> out;
+Inspection evaluate(const Specification& spec, const cad::Model& nominal, const compensation::CompensationResult& result) {
+  Inspection out;
+  std::map<std::string, DatumFrame> frames;  // by their datums joined with '|'; "" is the frame of no datums
   for (const CharacteristicSpec& s : spec.characteristics) {
     CharacteristicResult c;
     c.spec = s;
     c.outside = s.outside.value_or(0.5 * s.tolerance);
+    auto not_evaluated = [&](const std::string& why) {
+      c.reason = why;
+      out.characteristics.push_back(std::move(c));
+    };
     if (!(s.tolerance > 0.0)) {
-      c.reason = "no tolerance magnitude (the file's could not be read)";
-      out.push_back(std::move(c));
+      not_evaluated("no tolerance magnitude (the file's could not be read)");
       continue;
     }
-    if (!s.datums.empty()) {
-      c.reason = "datum reference frames are not evaluated yet";
-      out.push_back(std::move(c));
+    std::string key;
+    std::vector<DatumSpec> order;
+    std::string missing;
+    for (const std::string& name : s.datums) {
+      if (!key.empty()) key += '|';
+      key += name;
+      const auto d = std::find_if(spec.datums.begin(), spec.datums.end(), [&](const DatumSpec& x) { return x.name == name; });
+      if (d == spec.datums.end()) {
+        missing = name;
+        break;
+      }
+      order.push_back(*d);
+    }
+    if (!missing.empty()) {
+      not_evaluated("datum " + missing + " has no faces (a STEP file's datum features are not read yet)");
       continue;
     }
-    // The trusted points on the characteristic's faces, and those faces alone as a model to fit them to.
+    auto [it, added] = frames.try_emplace(key);
+    if (added) {
+      it->second = establish_frame(order, nominal, result);
+      for (const DatumResult& d : it->second.datums) out.datums.push_back({key, d});
+    }
+    const DatumFrame& frame = it->second;
+    if (!frame.ok()) {
+      not_evaluated("datum reference frame " + key + ": " + frame.reason);
+      continue;
+    }
+    // The trusted points on the characteristic's faces, in the CAD frame as its datums locate the part, and those
+    // faces alone as a model to fit them to.
     const std::set<int> faces(s.faces.begin(), s.faces.end());
+    const geometry::RigidTransform to_cad = frame.transform.inverse();
     std::vector<Point3> points;
     std::vector<double> u;
     for (const compensation::CompensatedPoint& p : result.points) {
       if (p.status == compensation::PointStatus::Ok && faces.contains(p.face)) {
-        points.push_back(p.contact);
+        points.push_back(to_cad * p.contact);
         u.push_back(p.uncertainty);
       }
     }
-    c.points = static_cast<int>(points.size());
-    if (c.points < kMinPointsForForm) {
-      c.reason = std::to_string(c.points) + " trusted points on its faces (" + std::to_string(kMinPointsForForm) +
-                 " needed for its form)";
-      out.push_back(std::move(c));
+    const int needed = std::max(1, static_cast<int>(frame.free_basis.cols()) + 1);
+    if (static_cast<int>(points.size()) < needed) {
+      c.points = static_cast<int>(points.size());
+      not_evaluated(std::to_string(c.points) + " trusted points on its faces (" + std::to_string(needed) +
+                    " needed for the motions its datums leave free)");
       continue;
     }
     cad::Model own;
     own.file_units = nominal.file_units;
     for (int f : s.faces) own.faces.push_back(nominal.faces[static_cast<std::size_t>(f)]);
     const cad::ModelLocator locator(own);
-    // Least squares (not the registration's robust weights: every trusted point counts), from where the whole
-    // part was registered.
-    registration::RegistrationOptions options;
-    options.initial = result.registration.transform;
-    options.robust.loss = registration::RobustLoss::None;
-    const registration::RegistrationResult fit = registration::register_points(locator, points, options);
-    if (!fit.converged()) {
-      c.reason = "the best fit of its points to its faces did not converge: " + fit.stop_reason;
-      out.push_back(std::move(c));
+    // Least squares (not the registration's robust weights: every trusted point counts).
+    const RestrictedFit fit = fit_in_motions(locator, points, frame.free_basis, frame.centre, frame.length, false);
+    if (!fit.converged) {
+      not_evaluated("the best fit of its points to its faces did not converge");
       continue;
     }
     const double centre = c.outside - 0.5 * s.tolerance;
@@ -166,31 +209,29 @@ std::vector<CharacteristicResult> evaluate(const Specification& spec, const cad:
     c.max = -std::numeric_limits<double>::infinity();
     bool inside = true, outside_surely = false;
     // A point whose foot fell on its faces' edge after the fit is past them (its distance is not along a normal):
-    // left out, and not counted.
-    c.points = 0;
-    for (std::size_t k = 0; k < points.size(); ++k) {
-      const registration::PointMatch& m = fit.matches[k];
-      if (!m.ok() || m.on_edge) continue;
-      ++c.points;
-      const double d = m.distance, U = 2.0 * u[k];
+    // fit_in_motions leaves it out, and it is not counted.
+    c.points = static_cast<int>(fit.used.size());
+    for (Eigen::Index r = 0; r < fit.d.size(); ++r) {
+      const double d = fit.d(r);
+      const Eigen::Matrix<double, 6, 1> J = fit.J.row(r).transpose();
+      const double uk = u[static_cast<std::size_t>(fit.used[static_cast<std::size_t>(r)])];
+      const double U = 2.0 * std::sqrt(uk * uk + J.dot(frame.covariance * J));
       c.min = std::min(c.min, d);
       c.max = std::max(c.max, d);
       const double width = 2.0 * std::abs(d - centre);
       if (width > c.value) {
         c.value = width;
-        c.u = 2.0 * u[k];
+        c.u = U;
       }
       inside = inside && d - U >= c.outside - s.tolerance && d + U <= c.outside;
       outside_surely = outside_surely || d - U > c.outside || d + U < c.outside - s.tolerance;
     }
-    if (c.points < kMinPointsForForm) {
-      c.reason = "after the best fit only " + std::to_string(c.points) + " of its points lie inside its faces";
-      c.decision = Decision::NotEvaluated;
-      out.push_back(std::move(c));
+    if (c.points < needed) {
+      not_evaluated("after the best fit only " + std::to_string(c.points) + " of its points lie inside its faces");
       continue;
     }
     c.decision = outside_surely ? Decision::DoesNotConform : inside ? Decision::Conforms : Decision::Indeterminate;
-    out.push_back(std::move(c));
+    out.characteristics.push_back(std::move(c));
   }
   return out;
 }

@@ -80,7 +80,7 @@ DeviationSummaries summarise_deviations(const compensation::CompensationResult& 
 
 std::string statistics_json(const compensation::CompensationResult& r, const RunInputs& inputs,
                             const FileTimings& files, const std::optional<Tolerance>& tolerance,
-                            std::span<const inspection::CharacteristicResult> characteristics) {
+                            const inspection::Inspection* inspection) {
   const DeviationSummaries dev = summarise_deviations(r, tolerance);
   const auto number = [](double v) { return json_number(v, 9); };
   const auto vec = [&](const Vector3& v) { return Json::array({number(v.x()), number(v.y()), number(v.z())}); };
@@ -184,9 +184,20 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
     all["out_of_tolerance"] = dev.all.out_of_tolerance;
   }
   j["deviation"] = all;
-  if (!characteristics.empty()) {
+  if (inspection != nullptr && !inspection->datums.empty()) {
     Json list = Json::array();
-    for (const inspection::CharacteristicResult& c : characteristics) {
+    for (const inspection::FrameDatum& f : inspection->datums) {
+      const inspection::DatumResult& d = f.datum;
+      Json x = {{"name", d.name},     {"frame", f.frame}, {"faces", d.faces}, {"fit", inspection::to_string(d.fit)},
+                {"points", d.points}, {"fixes", d.fixes}, {"rms", number(d.rms)}};
+      if (d.size_change) x["size_change"] = number(*d.size_change);
+      list.push_back(x);
+    }
+    j["datums"] = list;
+  }
+  if (inspection != nullptr && !inspection->characteristics.empty()) {
+    Json list = Json::array();
+    for (const inspection::CharacteristicResult& c : inspection->characteristics) {
       Json x = {{"name", c.spec.name},
                 {"type", c.spec.type},
                 {"faces", c.spec.faces},

@@ -67,7 +67,7 @@ TEST(Characteristics, AFlatnessIsTheTwistsHalfHeightAndItsDecisionFollowsTheZone
   const Measured m = measure(h);
   // The grid's extreme points sit at s, t = 0.1 and 0.9: h(s − ½)(t − ½) spans ±0.16 h, a width of 0.32 h.
   const double truth = 2.0 * 0.16 * h;
-  const CharacteristicResult wide = evaluate(flatness(0.03), m.nominal, m.result).at(0);
+  const CharacteristicResult wide = evaluate(flatness(0.03), m.nominal, m.result).characteristics.at(0);
   std::printf("flatness %.2f um (truth %.2f um), u %.2f um, %d points, min %.2f max %.2f um: %s\n", wide.value * 1e3,
               truth * 1e3, wide.u * 1e3, wide.points, wide.min * 1e3, wide.max * 1e3, to_string(wide.decision));
   EXPECT_EQ(wide.points, 63);
@@ -76,22 +76,22 @@ TEST(Characteristics, AFlatnessIsTheTwistsHalfHeightAndItsDecisionFollowsTheZone
   EXPECT_NEAR(wide.max, 0.16 * h, 0.001);
   EXPECT_EQ(wide.decision, Decision::Conforms);
   // A zone narrower than the form by more than U: does not conform.
-  EXPECT_EQ(evaluate(flatness(0.008), m.nominal, m.result).at(0).decision, Decision::DoesNotConform);
+  EXPECT_EQ(evaluate(flatness(0.008), m.nominal, m.result).characteristics.at(0).decision, Decision::DoesNotConform);
   // A zone exactly the measured value: its extreme point sits on the limit, its ±U across it.
-  EXPECT_EQ(evaluate(flatness(wide.value), m.nominal, m.result).at(0).decision, Decision::Indeterminate);
+  EXPECT_EQ(evaluate(flatness(wide.value), m.nominal, m.result).characteristics.at(0).decision, Decision::Indeterminate);
 }
 
-TEST(Characteristics, WithDatumsOrTooFewPointsTheyAreNotEvaluatedWithTheReason) {
+TEST(Characteristics, WithADatumWithoutFacesOrTooFewPointsTheyAreNotEvaluatedWithTheReason) {
   const Measured m = measure(0.02);
   Specification s = flatness(0.05);
-  s.characteristics[0].datums = {"A"};
-  const CharacteristicResult with_datums = evaluate(s, m.nominal, m.result).at(0);
+  s.characteristics[0].datums = {"A"};  // as from a STEP file's PMI, whose datum features are not read
+  const CharacteristicResult with_datums = evaluate(s, m.nominal, m.result).characteristics.at(0);
   EXPECT_EQ(with_datums.decision, Decision::NotEvaluated);
-  EXPECT_NE(with_datums.reason.find("datum"), std::string::npos);
+  EXPECT_NE(with_datums.reason.find("datum A has no faces"), std::string::npos) << with_datums.reason;
   // Six trusted points cannot show a form past the six motions of a best fit.
   compensation::CompensationResult few = m.result;
   for (std::size_t k = 6; k < few.points.size(); ++k) few.points[k].status = compensation::PointStatus::Outlier;
-  const CharacteristicResult sparse = evaluate(flatness(0.05), m.nominal, few).at(0);
+  const CharacteristicResult sparse = evaluate(flatness(0.05), m.nominal, few).characteristics.at(0);
   EXPECT_EQ(sparse.decision, Decision::NotEvaluated);
   EXPECT_EQ(sparse.points, 6);
   EXPECT_NE(sparse.reason.find("6 trusted points"), std::string::npos) << sparse.reason;
@@ -116,11 +116,19 @@ TEST(Characteristics, ABadSpecificationIsRefusedNamingTheFileAndTheCause) {
   refused(R"({"characteristics": [{"faces": [3], "tolerance": 0.1}]})", "face 3 is not in the model");
   refused(R"({"characteristics": [{"faces": [0], "tolerance": 0.1, "datums": ["A"]}]})", "datum A is not defined");
   refused(R"({"characteristics": [{"type": "position", "faces": [0], "tolerance": 0.1}]})", "unknown type");
-  std::ofstream(path) << R"({"datums": {"A": {"faces": [0]}}, "characteristics": [{"name": "P", "faces": [0], "tolerance": 0.1, "outside": 0.02, "datums": ["A"]}]})";
+  refused(R"({"datums": {"A": {}}, "characteristics": []})", "datum A: no \"faces\"");
+  refused(R"({"datums": {"A": {"faces": [7]}}, "characteristics": []})", "datum A: face 7 is not in the model");
+  refused(R"({"datums": {"A": {"faces": [0], "fit": "minimum-zone"}}, "characteristics": []})", "unknown fit \"minimum-zone\"");
+  refused(R"({"datums": {"A": {"faces": [0]}}, "alignment": ["A"], "characteristics": []})", "\"alignment\"");
+  std::ofstream(path) << R"({"datums": {"A": {"faces": [0], "fit": "tangent"}}, "characteristics": [{"name": "P", "faces": [0], "tolerance": 0.1, "outside": 0.02, "datums": ["A"]}]})";
   const Specification s = read_specification(path, model);
   ASSERT_EQ(s.characteristics.size(), 1u);
   EXPECT_EQ(s.characteristics[0].name, "P");
   EXPECT_DOUBLE_EQ(*s.characteristics[0].outside, 0.02);
+  ASSERT_EQ(s.datums.size(), 1u);
+  EXPECT_EQ(s.datums[0].name, "A");
+  EXPECT_EQ(s.datums[0].faces, std::vector<int>{0});
+  EXPECT_EQ(s.datums[0].fit, DatumFit::Tangent);
   std::filesystem::remove(path);
 }
 

@@ -1,8 +1,8 @@
 #pragma once
 // A drawing's characteristics judged on the compensated points (DESIGN.md §7): surface profiles, flatness being one
-// without datums, with their value and the decision under ISO 14253-1 (U = 2u). This step evaluates the
-// characteristics without datums (form only: the points best-fitted to their nominal faces first); one with datums
-// is `not-evaluated`, with that reason, until datum reference frames are built.
+// without datums, with their value and the decision under ISO 14253-1 (U = 2u). Each is judged in its datum
+// reference frame (datum_frame.hpp); motions its datums leave free, all six without datums, are best-fitted to its
+// own points (least squares) first.
 
 #include <filesystem>
 #include <optional>
@@ -12,6 +12,7 @@
 #include "probecomp/cad/model.hpp"
 #include "probecomp/cad/pmi.hpp"
 #include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/inspection/datum_frame.hpp"
 
 namespace probecomp::inspection {
 
@@ -25,17 +26,19 @@ struct CharacteristicSpec {
 };
 
 struct Specification {
+  std::vector<DatumSpec> datums;  // as the file defines them, in its order
   std::vector<CharacteristicSpec> characteristics;
 };
 
 // The specification file (JSON, DESIGN.md §7). Throws InputError naming the file and what is wrong (not JSON, a
-// characteristic without faces or with a tolerance that is not positive, an unknown type, a face the model does not
-// have, a datum the file does not define).
+// characteristic or datum without faces, a tolerance that is not positive, an unknown type or fit, a face the model
+// does not have, a datum the file does not define).
 [[nodiscard]] Specification read_specification(const std::filesystem::path& path, const cad::Model& model);
 
 // The characteristics a STEP AP242 file's PMI states (cad/pmi.hpp): each profile of surface and flatness as a
-// surface profile on its faces (datums as the file gives them). One whose magnitude could not be read has a
-// tolerance of 0, which evaluate() reports as not evaluated, with that reason. The others (positions,
+// surface profile on its faces (datums as the file gives them, without their faces: the file's datum features are
+// not read yet, so such a characteristic is not evaluated, with that reason). One whose magnitude could not be read
+// has a tolerance of 0, which evaluate() reports as not evaluated, with that reason. The others (positions,
 // perpendicularities, ...) are not characteristics of this step and are counted in `skipped`.
 [[nodiscard]] Specification from_pmi(const cad::Pmi& pmi, int& skipped);
 
@@ -48,14 +51,26 @@ struct CharacteristicResult {
   int points = 0;        // trusted points used
   double min = 0.0, max = 0.0;  // signed deviations in the characteristic's frame, mm
   double value = 0.0;    // 2·max|d − (outside − t/2)|: the width of the smallest such zone holding every point, mm
-  double u = 0.0;        // of value: 2u of the point that sets it, mm
+  double u = 0.0;        // of value: 2u of the point that sets it (its own and its datums' share), mm
   Decision decision = Decision::NotEvaluated;
   std::string reason;    // why not evaluated
 };
 
-// Each characteristic on `result`'s trusted (ok) points of its faces. Without datums the points are best-fitted to
-// the nominal faces (least squares, the motions they fix; the rest held) before their deviations are taken.
-[[nodiscard]] std::vector<CharacteristicResult> evaluate(const Specification& spec, const cad::Model& nominal,
-                                                         const compensation::CompensationResult& result);
+// One datum as a frame fitted it.
+struct FrameDatum {
+  std::string frame;  // the frame's datums, primary first, joined by '|': "A|B|C"
+  DatumResult datum;
+};
+
+struct Inspection {
+  std::vector<FrameDatum> datums;  // of every frame set up, in the order of first use
+  std::vector<CharacteristicResult> characteristics;
+};
+
+// Each characteristic on `result`'s trusted (ok) points of its faces, in its datum reference frame; motions the
+// frame leaves free are best-fitted to the characteristic's points on its nominal faces (least squares, the motions
+// they fix; the rest held) before their deviations are taken.
+[[nodiscard]] Inspection evaluate(const Specification& spec, const cad::Model& nominal,
+                                  const compensation::CompensationResult& result);
 
 }  // namespace probecomp::inspection

@@ -65,10 +65,11 @@ struct DeviationSummaries {
 // (read, prepare, register, fit, compensate, write, total). Lengths in mm, whatever the points' unit.
 // With a tolerance: it, and each face's and the whole run's count of trusted points outside it; each face's trusted
 // deviations (mean, std, min, max) in any case.
-// With characteristics (inspection/characteristics.hpp): their results under "characteristics" (DESIGN.md §7's keys).
+// With an inspection (inspection/characteristics.hpp): its characteristics under "characteristics" and the datums its
+// frames fitted under "datums" (DESIGN.md §7's keys).
 [[nodiscard]] std::string statistics_json(const compensation::CompensationResult& result, const RunInputs& inputs,
                                           const FileTimings& timings,
                                           const std::optional<Tolerance>& tolerance = std::nullopt,
-                                          std::span<const inspection::CharacteristicResult> characteristics = {});
+                                          const inspection::Inspection* inspection = nullptr);
 
 }  // namespace probecomp::results

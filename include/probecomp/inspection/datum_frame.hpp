@@ -1,0 +1,67 @@
+#pragma once
+// Datum reference frames (ISO 5459, ASME Y14.5; DESIGN.md §7) set up on the compensated contact points. A datum is
+// the nominal shape of its faces fitted to the trusted points on them: least squares, a cylinder's or sphere's size
+// free (a hole's datum is its axis, whatever its measured radius). Datums are taken in order, each moving the part
+// only in the motions the ones before it left free: the primary fixes what its feature can (a plane: one
+// translation and two rotations; a cylinder: two translations and two rotations), the secondary then the tertiary
+// fix what remains. Which motions a feature fixes is read from its points, as registration/constraints.hpp does for
+// the whole part, so the paper's 3-2-1 (three points on a plane, two on a second, one on a third) is a frame too.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "probecomp/cad/model.hpp"
+#include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/geometry/rigid.hpp"
+
+namespace probecomp::inspection {
+
+enum class DatumFit { LeastSquares, Tangent };
+[[nodiscard]] const char* to_string(DatumFit f);  // "least-squares", "tangent"
+
+struct DatumSpec {
+  std::string name;
+  std::vector<int> faces;  // model face indices, as `probecomp info` lists them
+  DatumFit fit = DatumFit::LeastSquares;
+};
+
+struct DatumResult {
+  std::string name;
+  std::vector<int> faces;
+  DatumFit fit = DatumFit::LeastSquares;
+  int points = 0;    // trusted points fitted
+  int fixes = 0;     // motions it fixed, of those the datums before it left free
+  double rms = 0.0;  // of its points' distances from the fitted datum, mm
+  std::optional<double> size_change;  // cylinder or sphere: fitted radius minus nominal, mm
+};
+
+// Motions are scaled twists δ = (L·ω, v) about `centre` (registration::motion_about), L = `length`.
+struct DatumFrame {
+  enum class Status { OK, NotDone };
+  Status status = Status::NotDone;
+  std::string reason;  // NotDone: why, one line naming the datum
+  // CAD to machine, as the registration's transform, with the part located by its datums; motions no datum fixes
+  // are those of the registration.
+  geometry::RigidTransform transform = geometry::RigidTransform::Identity();
+  std::vector<DatumResult> datums;  // in the frame's order
+  Point3 centre = Point3::Zero();
+  double length = 1.0;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> free_basis;  // orthonormal columns: the motions no datum fixes
+  // Of the located part's motion, from the datum points' standard uncertainties (first order): its share of a
+  // deviation's variance at x with normal n is J·covariance·Jᵀ, J = ((x − c) × n / L, n) (registration::normal_variance).
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+
+  [[nodiscard]] bool ok() const { return status == Status::OK; }
+  [[nodiscard]] int fixed() const { return 6 - static_cast<int>(free_basis.cols()); }
+};
+
+// The frame of `datums` (primary first) on `result`'s ok points. NotDone, with the reason, when a datum has no
+// trusted point, fixes no motion the ones before it left, its fit does not converge, or a fit is not built yet
+// (tangent).
+[[nodiscard]] DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Model& nominal,
+                                         const compensation::CompensationResult& result);
+
+}  // namespace probecomp::inspection

@@ -1,0 +1,218 @@
+#include "probecomp/inspection/datum_frame.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include <Eigen/Eigenvalues>
+
+#include "probecomp/cad/analytic.hpp"
+#include "probecomp/cad/locator.hpp"
+#include "probecomp/registration/constraints.hpp"
+#include "restricted_fit.hpp"
+
+namespace probecomp::inspection {
+
+namespace {
+
+// Gauss–Newton stops when an update moves no point by more than this (mm), far below what a CMM resolves; the
+// points start within micrometres of their faces (the registration put them there), so a few steps suffice.
+constexpr double kMotionTolerance = 1e-10;
+constexpr int kMaxIterations = 50;
+
+// The rows of H's eigen-decomposition the points fix: eigenvalues above registration::kUnconstrainedRatio of the
+// largest, as the registration judges the whole part's motions.
+void split_directions(const Eigen::MatrixXd& A, RestrictedFit& fit) {
+  const Eigen::Index k = A.cols();
+  fit.fixed.resize(k, 0);
+  fit.free.resize(k, 0);
+  fit.lambda.resize(0);
+  if (k == 0) return;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(A.transpose() * A);
+  const double largest = eig.eigenvalues().maxCoeff();
+  std::vector<Eigen::Index> fixed, free;
+  for (Eigen::Index i = 0; i < k; ++i) {
+    (largest > 0.0 && eig.eigenvalues()(i) > registration::kUnconstrainedRatio * largest ? fixed : free).push_back(i);
+  }
+  fit.fixed.resize(k, static_cast<Eigen::Index>(fixed.size()));
+  fit.lambda.resize(static_cast<Eigen::Index>(fixed.size()));
+  for (std::size_t j = 0; j < fixed.size(); ++j) {
+    fit.fixed.col(static_cast<Eigen::Index>(j)) = eig.eigenvectors().col(fixed[j]);
+    fit.lambda(static_cast<Eigen::Index>(j)) = eig.eigenvalues()(fixed[j]);
+  }
+  fit.free.resize(k, static_cast<Eigen::Index>(free.size()));
+  for (std::size_t j = 0; j < free.size(); ++j) fit.free.col(static_cast<Eigen::Index>(j)) = eig.eigenvectors().col(free[j]);
+}
+
+// Where the datum's faces are all cylinders or all spheres (features of size), the radius of its fit is free. Returns
+// the faces' kind then.
+std::optional<cad::ElementaryKind> size_kind(const cad::Model& model, const std::vector<int>& faces) {
+  std::optional<cad::ElementaryKind> kind;
+  for (int f : faces) {
+    const cad::Face& face = model.faces[static_cast<std::size_t>(f)];
+    if (!face.analytic) return std::nullopt;
+    const cad::ElementaryKind k = face.analytic->surface().kind;
+    if (k != cad::ElementaryKind::Cylinder && k != cad::ElementaryKind::Sphere) return std::nullopt;
+    if (kind && *kind != k) return std::nullopt;
+    kind = k;
+  }
+  return kind;
+}
+
+// +1 where the outward normal points away from the cylinder's axis (a pin) or the sphere's centre (a ball), −1 for a
+// hole or a socket: the sign that turns the mean outward distance into a change of radius.
+double radius_sign(const cad::ElementarySurface& s, const cad::ModelPoint& foot) {
+  Vector3 radial = foot.point - s.origin;
+  if (s.kind == cad::ElementaryKind::Cylinder) radial -= radial.dot(s.z) * s.z;
+  return radial.dot(foot.normal) >= 0.0 ? 1.0 : -1.0;
+}
+
+}  // namespace
+
+RestrictedFit fit_in_motions(const cad::ModelLocator& faces, std::span<const Point3> points, const MotionBasis& basis,
+                             const Point3& centre, double length, bool size_free) {
+  RestrictedFit fit;
+  std::vector<Point3> moved(points.begin(), points.end());
+  for (int iteration = 0;; ++iteration) {
+    fit.feet = faces.closest_points(moved);
+    fit.used.clear();
+    for (std::size_t i = 0; i < moved.size(); ++i) {
+      if (fit.feet[i].ok() && !fit.feet[i].on_trim_edge) fit.used.push_back(static_cast<int>(i));
+    }
+    const Eigen::Index n = static_cast<Eigen::Index>(fit.used.size());
+    fit.J.resize(n, 6);
+    fit.d.resize(n);
+    for (Eigen::Index r = 0; r < n; ++r) {
+      const cad::ModelPoint& foot = fit.feet[static_cast<std::size_t>(fit.used[static_cast<std::size_t>(r)])];
+      const Point3& x = moved[static_cast<std::size_t>(fit.used[static_cast<std::size_t>(r)])];
+      fit.J.block<1, 3>(r, 0) = ((x - centre).cross(foot.normal) / length).transpose();
+      fit.J.block<1, 3>(r, 3) = foot.normal.transpose();
+      fit.d(r) = foot.distance;
+    }
+    fit.A = fit.J * basis;
+    Eigen::VectorXd d = fit.d;
+    fit.size = 0.0;
+    if (size_free && n > 0) {
+      // The size's least-squares value is the mean distance: taking means out of d and A solves for it.
+      fit.size = d.mean();
+      d.array() -= fit.size;
+      fit.A.rowwise() -= fit.A.colwise().mean();
+    }
+    split_directions(fit.A, fit);
+    fit.iterations = iteration;
+    if (n == 0 || iteration == kMaxIterations) return fit;
+    const Eigen::VectorXd g = fit.fixed.transpose() * (fit.A.transpose() * d);
+    const geometry::Twist delta = -basis * (fit.fixed * (g.array() / fit.lambda.array()).matrix());
+    const geometry::RigidTransform step = registration::motion_about(delta, centre, length);
+    fit.motion = step * fit.motion;
+    double largest = 0.0;
+    for (Point3& x : moved) {
+      const Point3 y = step * x;
+      largest = std::max(largest, (y - x).norm());
+      x = y;
+    }
+    if (largest <= kMotionTolerance) {
+      // The last step moved the points by less than the tolerance: the feet, J and d above stand for the end.
+      fit.converged = true;
+      return fit;
+    }
+  }
+}
+
+const char* to_string(DatumFit f) { return f == DatumFit::Tangent ? "tangent" : "least-squares"; }
+
+DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Model& nominal,
+                           const compensation::CompensationResult& result) {
+  DatumFrame frame;
+  const geometry::RigidTransform to_cad = result.registration.transform.inverse();
+  // Each datum's trusted points in the CAD frame, with their standard uncertainties.
+  std::vector<std::vector<Point3>> points(datums.size());
+  std::vector<std::vector<double>> u(datums.size());
+  Point3 centre = Point3::Zero();
+  std::size_t total = 0;
+  for (std::size_t s = 0; s < datums.size(); ++s) {
+    const std::set<int> faces(datums[s].faces.begin(), datums[s].faces.end());
+    for (const compensation::CompensatedPoint& p : result.points) {
+      if (p.status != compensation::PointStatus::Ok || !faces.contains(p.face)) continue;
+      points[s].push_back(to_cad * p.contact);
+      u[s].push_back(std::isfinite(p.uncertainty) ? p.uncertainty : 0.0);
+      centre += points[s].back();
+      ++total;
+    }
+  }
+  double spread = 0.0;
+  if (total > 0) {
+    centre /= static_cast<double>(total);
+    for (const auto& set : points) {
+      for (const Point3& x : set) spread += (x - centre).squaredNorm();
+    }
+    spread = std::sqrt(spread / static_cast<double>(total));
+  }
+  frame.centre = centre;
+  frame.length = spread > 0.0 ? spread : 1.0;
+  frame.transform = result.registration.transform;
+  MotionBasis basis = MotionBasis::Identity(6, 6);
+  geometry::RigidTransform correction = geometry::RigidTransform::Identity();  // applied to CAD-frame points
+  // ∂(correction's scaled twist)/∂(each datum point's error along its normal), to first order: 6 × all points.
+  Eigen::MatrixXd sensitivity = Eigen::MatrixXd::Zero(6, static_cast<Eigen::Index>(total));
+  Eigen::VectorXd variance(static_cast<Eigen::Index>(total));
+  Eigen::Index first_column = 0;
+  auto refuse = [&](const std::string& why) {
+    frame.status = DatumFrame::Status::NotDone;
+    frame.reason = why;
+    return frame;
+  };
+  for (std::size_t s = 0; s < datums.size(); ++s) {
+    const DatumSpec& spec = datums[s];
+    const std::string datum = "datum " + spec.name;
+    if (spec.fit == DatumFit::Tangent) return refuse(datum + ": tangent datum fits are not built yet");
+    if (points[s].empty()) return refuse(datum + ": no trusted point on its faces");
+    if (basis.cols() == 0) return refuse(datum + ": the datums before it already fix every motion");
+    cad::Model own;
+    own.file_units = nominal.file_units;
+    for (int f : spec.faces) own.faces.push_back(nominal.faces[static_cast<std::size_t>(f)]);
+    const cad::ModelLocator locator(own);
+    std::vector<Point3> moved;
+    moved.reserve(points[s].size());
+    for (const Point3& x : points[s]) moved.push_back(correction * x);
+    const std::optional<cad::ElementaryKind> kind = size_kind(nominal, spec.faces);
+    const RestrictedFit fit = fit_in_motions(locator, moved, basis, centre, frame.length, kind.has_value());
+    if (!fit.converged) return refuse(datum + ": its fit did not converge");
+    if (fit.fixed.cols() == 0) {
+      return refuse(datum + ": its " + std::to_string(fit.used.size()) + " points fix no motion the datums before it left free");
+    }
+    correction = fit.motion * correction;
+    // First-order propagation: this datum's update is −G (e + J δ_before), G = basis · fixed · Λ⁻¹ · fixedᵀ · Aᵀ.
+    const Eigen::MatrixXd G =
+        basis * (fit.fixed * fit.lambda.cwiseInverse().asDiagonal() * fit.fixed.transpose() * fit.A.transpose());
+    sensitivity = (Eigen::MatrixXd::Identity(6, 6) - G * fit.J) * sensitivity;
+    for (std::size_t r = 0; r < fit.used.size(); ++r) {
+      sensitivity.col(first_column + fit.used[r]) -= G.col(static_cast<Eigen::Index>(r));
+    }
+    for (std::size_t i = 0; i < points[s].size(); ++i) variance(first_column + static_cast<Eigen::Index>(i)) = u[s][i] * u[s][i];
+    first_column += static_cast<Eigen::Index>(points[s].size());
+
+    DatumResult d;
+    d.name = spec.name;
+    d.faces = spec.faces;
+    d.fit = spec.fit;
+    d.points = static_cast<int>(fit.used.size());
+    d.fixes = static_cast<int>(fit.fixed.cols());
+    d.rms = fit.d.size() > 0 ? std::sqrt((fit.d.array() - fit.size).square().mean()) : 0.0;
+    if (kind && !fit.used.empty()) {
+      const cad::ModelPoint& foot = fit.feet[static_cast<std::size_t>(fit.used.front())];
+      d.size_change = fit.size * radius_sign(own.faces[static_cast<std::size_t>(foot.face)].analytic->surface(), foot);
+    }
+    frame.datums.push_back(std::move(d));
+    basis = basis * fit.free;
+  }
+  // Unused columns (points past an edge) have zero sensitivity; their variance does not matter.
+  for (Eigen::Index i = first_column; i < variance.size(); ++i) variance(i) = 0.0;
+  frame.covariance = sensitivity * variance.asDiagonal() * sensitivity.transpose();
+  frame.free_basis = basis;
+  frame.transform = result.registration.transform * correction.inverse();
+  frame.status = DatumFrame::Status::OK;
+  return frame;
+}
+
+}  // namespace probecomp::inspection

@@ -1,0 +1,298 @@
+// Datum reference frames against closed forms, on a block with a hole that OpenCASCADE builds (60 × 40 × 20 mm, hole
+// of radius 5 at (40, 20) along z). The "measured" contact points are the actual part's, placed by a known pose; the
+// registration's transform handed over is deliberately not that pose, since a frame must not depend on it.
+//   A  the bottom (z = 0)       B  the front (y = 0)       C  the left end (x = 0)       D  the hole
+// Every figure expected below is the exact geometry of the actual part in the frame, derived in the comments.
+
+#include "probecomp/inspection/datum_frame.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "probecomp/inspection/characteristics.hpp"
+#include "probecomp/registration/constraints.hpp"
+#include "support/prismatic_parts.hpp"
+
+namespace probecomp::inspection {
+namespace {
+
+using geometry::RigidTransform;
+
+struct Block {
+  cad::Model model = testing::block_with_hole();
+  int bottom = testing::face_through(model, Point3(10, 10, 0));
+  int front = testing::face_through(model, Point3(10, 0, 10));
+  int left = testing::face_through(model, Point3(0, 10, 10));
+  int top = testing::face_through(model, Point3(10, 10, 20));
+  int right = testing::face_through(model, Point3(60, 10, 10));
+  int back = testing::face_through(model, Point3(10, 40, 10));
+  int hole = testing::face_through(model, Point3(45, 20, 10));
+};
+
+const Block& block() {
+  static const Block b;
+  return b;
+}
+
+// The actual part's points, in its own frame, by face: the nominal points each map to their actual place.
+struct Part {
+  std::function<Point3(const Point3&)> bottom = [](const Point3& p) { return p; };
+  std::function<Point3(const Point3&)> left = [](const Point3& p) { return p; };
+  std::function<Point3(const Point3&)> hole = [](const Point3& p) { return p; };
+};
+
+// The actual pose of the part on the machine, and a registration 0.05° and 10 µm away from it.
+RigidTransform actual_pose() {
+  return Eigen::Translation3d(0.4, -0.3, 0.2) * Eigen::AngleAxisd(0.3 * M_PI / 180, Vector3(1, 2, 3).normalized());
+}
+RigidTransform registered_pose() {
+  return actual_pose() * Eigen::Translation3d(0.01, 0.0, -0.01) * Eigen::AngleAxisd(0.05 * M_PI / 180, Vector3::UnitZ());
+}
+
+void add(compensation::CompensationResult& r, const Point3& actual, int face, double u) {
+  compensation::CompensatedPoint p;
+  p.status = compensation::PointStatus::Ok;
+  p.face = face;
+  p.contact = actual_pose() * actual;
+  p.uncertainty = u;
+  r.points.push_back(p);
+}
+
+// Grids on every face (away from the hole), `u` on each point.
+compensation::CompensationResult measure(const Part& part, double u = 0.001) {
+  const Block& b = block();
+  compensation::CompensationResult r;
+  r.registration.transform = registered_pose();
+  for (double x = 5; x <= 55; x += 5) {
+    for (double y = 5; y <= 35; y += 5) {
+      if (std::hypot(x - 40, y - 20) < 7) continue;
+      add(r, part.bottom(Point3(x, y, 0)), b.bottom, u);
+      add(r, Point3(x, y, 20), b.top, u);
+    }
+  }
+  for (double z = 4; z <= 16; z += 4) {
+    for (double x = 5; x <= 55; x += 5) {
+      add(r, Point3(x, 0, z), b.front, u);
+      add(r, Point3(x, 40, z), b.back, u);
+    }
+    for (double y = 5; y <= 35; y += 5) {
+      add(r, part.left(Point3(0, y, z)), b.left, u);
+      add(r, Point3(60, y, z), b.right, u);
+    }
+    for (int k = 0; k < 12; ++k) {
+      const double phi = 2 * M_PI * k / 12;
+      add(r, part.hole(Point3(40 + 5 * std::cos(phi), 20 + 5 * std::sin(phi), z)), b.hole, u);
+    }
+  }
+  return r;
+}
+
+// The signed deviations (+ outside the material) of a face's points in the frame of `datums`: its profile's min and
+// max, with the motions the frame leaves free best-fitted as the characteristic does.
+CharacteristicResult profile(const compensation::CompensationResult& r, int face, std::vector<std::string> datums) {
+  const Block& b = block();
+  Specification spec;
+  spec.datums = {{"A", {b.bottom}}, {"B", {b.front}}, {"C", {b.left}}, {"D", {b.hole}}, {"T", {b.top}}};
+  spec.characteristics = {{.name = "P", .faces = {face}, .tolerance = 0.1, .datums = std::move(datums)}};
+  return evaluate(spec, b.model, r).characteristics.at(0);
+}
+
+TEST(DatumFrame, APrimaryPlaneTiltedUnderThePartTiltsTheTopInItsFrame) {
+  // The bottom's actual points lie on z = s(x − 30): the frame turns the part by θ = atan s about y through (30, ·, 0)
+  // to lay that plane on z = 0, so the top's point (x, y, 20) goes to z' = 20 cos θ − (x − 30) sin θ.
+  constexpr double s = 1e-3;
+  Part part;
+  part.bottom = [](const Point3& p) { return Point3(p.x(), p.y(), s * (p.x() - 30)); };
+  const compensation::CompensationResult r = measure(part);
+  const double theta = std::atan(s);
+  const auto d = [&](double x) { return 20 * std::cos(theta) - (x - 30) * std::sin(theta) - 20; };
+  for (const std::vector<std::string>& datums : {std::vector<std::string>{"A"}, {"A", "B", "C"}, {"A", "C", "B"}}) {
+    const CharacteristicResult c = profile(r, block().top, datums);
+    SCOPED_TRACE(datums.size());
+    ASSERT_NE(c.decision, Decision::NotEvaluated) << c.reason;
+    EXPECT_NEAR(c.min, d(55), 1e-7);
+    EXPECT_NEAR(c.max, d(5), 1e-7);
+    EXPECT_NEAR(c.value, 2 * std::max(std::abs(d(5)), std::abs(d(55))), 1e-7);
+  }
+  // Form alone (no datums) sees the top as flat.
+  EXPECT_LT(profile(r, block().top, {}).value, 1e-7);
+  const DatumFrame frame = establish_frame({{"A", {block().bottom}}}, block().model, r);
+  ASSERT_TRUE(frame.ok()) << frame.reason;
+  EXPECT_EQ(frame.datums.at(0).fixes, 3);
+  EXPECT_EQ(frame.fixed(), 3);
+  EXPECT_LT(frame.datums.at(0).rms, 1e-8);
+}
+
+TEST(DatumFrame, DatumsAreTakenInTheirOrder) {
+  // The left end's actual points lie on x = t(y − 20), turned about z. As tertiary (A|B|C) it fixes only the
+  // translation along x, by its points' mean x, 0: the right end stays where it is. As secondary (A|C|B) it fixes the
+  // turn about z too, γ = atan t, so the right end's point (60, y) goes to x' = 60 cos γ − (y − 20) sin γ.
+  constexpr double t = 2e-3;
+  Part part;
+  part.left = [](const Point3& p) { return Point3(t * (p.y() - 20), p.y(), p.z()); };
+  const compensation::CompensationResult r = measure(part);
+  const CharacteristicResult abc = profile(r, block().right, {"A", "B", "C"});
+  ASSERT_NE(abc.decision, Decision::NotEvaluated) << abc.reason;
+  EXPECT_NEAR(abc.min, 0.0, 1e-7);
+  EXPECT_NEAR(abc.max, 0.0, 1e-7);
+  const double gamma = std::atan(t);
+  const auto d = [&](double y) { return 60 * std::cos(gamma) - (y - 20) * std::sin(gamma) - 60; };
+  const CharacteristicResult acb = profile(r, block().right, {"A", "C", "B"});
+  ASSERT_NE(acb.decision, Decision::NotEvaluated) << acb.reason;
+  EXPECT_NEAR(acb.min, d(35), 1e-7);
+  EXPECT_NEAR(acb.max, d(5), 1e-7);
+  const DatumFrame frame = establish_frame({{"A", {block().bottom}}, {"B", {block().front}}, {"C", {block().left}}},
+                                           block().model, r);
+  ASSERT_TRUE(frame.ok()) << frame.reason;
+  EXPECT_EQ(frame.datums.at(0).fixes, 3);
+  EXPECT_EQ(frame.datums.at(1).fixes, 2);
+  EXPECT_EQ(frame.datums.at(2).fixes, 1);
+  EXPECT_EQ(frame.fixed(), 6);
+}
+
+// The least and largest deviation of points turned by the θ that minimises Σ d(p, θ)² (golden-section search; the
+// sum is convex over these small angles).
+std::pair<double, double> best_turned(const std::vector<Point3>& points, const std::function<double(const Point3&, double)>& d) {
+  const auto sum = [&](double theta) {
+    double s = 0;
+    for (const Point3& p : points) s += d(p, theta) * d(p, theta);
+    return s;
+  };
+  double lo = -0.01, hi = 0.01;
+  const double g = (std::sqrt(5.0) - 1) / 2;
+  while (hi - lo > 1e-13) {
+    const double a = hi - g * (hi - lo), b = lo + g * (hi - lo);
+    (sum(a) < sum(b) ? hi : lo) = sum(a) < sum(b) ? b : a;
+  }
+  const double theta = 0.5 * (lo + hi);
+  double least = INFINITY, largest = -INFINITY;
+  for (const Point3& p : points) {
+    least = std::min(least, d(p, theta));
+    largest = std::max(largest, d(p, theta));
+  }
+  return {least, largest};
+}
+
+TEST(DatumFrame, AHoleAsSecondaryDatumCentresItsAxisWhateverItsSize) {
+  // The hole is 5 µm larger in radius than drawn and its axis is at (40.02, 19.99): A|D moves the part by
+  // (−0.02, +0.01), so the right end (outward +x) is 0.02 mm inside the material and the back (outward +y) 0.01 mm
+  // outside. The turn θ about the hole's axis is left free, and best-fitted to each face's own points (least squares):
+  // it takes the right end's point (59.98, y + 0.01) and the back's (x − 0.02, 40.01) round (40, 20), trading
+  // against their offsets (best_turned).
+  Part part;
+  part.hole = [](const Point3& p) -> Point3 {  // a Point3, not an Eigen expression of the local `radial`
+    const Vector3 radial = Vector3(p.x() - 40, p.y() - 20, 0).normalized();
+    return Point3(40.02, 19.99, p.z()) + 5.005 * radial;
+  };
+  const compensation::CompensationResult r = measure(part);
+  std::vector<Point3> right_points, back_points;
+  for (double z = 4; z <= 16; z += 4) {
+    for (double y = 5; y <= 35; y += 5) right_points.push_back(Point3(59.98, y + 0.01, z));
+    for (double x = 5; x <= 55; x += 5) back_points.push_back(Point3(x - 0.02, 40.01, z));
+  }
+  const auto right_d = [](const Point3& p, double theta) {
+    return 40 + std::cos(theta) * (p.x() - 40) - std::sin(theta) * (p.y() - 20) - 60;
+  };
+  const auto back_d = [](const Point3& p, double theta) {
+    return 20 + std::sin(theta) * (p.x() - 40) + std::cos(theta) * (p.y() - 20) - 40;
+  };
+  const CharacteristicResult right = profile(r, block().right, {"A", "D"});
+  ASSERT_NE(right.decision, Decision::NotEvaluated) << right.reason;
+  EXPECT_NEAR(right.min, best_turned(right_points, right_d).first, 1e-7);
+  EXPECT_NEAR(right.max, best_turned(right_points, right_d).second, 1e-7);
+  const CharacteristicResult back = profile(r, block().back, {"A", "D"});
+  EXPECT_NEAR(back.min, best_turned(back_points, back_d).first, 1e-7);
+  EXPECT_NEAR(back.max, best_turned(back_points, back_d).second, 1e-7);
+  const DatumFrame frame = establish_frame({{"A", {block().bottom}}, {"D", {block().hole}}}, block().model, r);
+  ASSERT_TRUE(frame.ok()) << frame.reason;
+  EXPECT_EQ(frame.datums.at(1).fixes, 2);
+  EXPECT_EQ(frame.fixed(), 5);
+  ASSERT_TRUE(frame.datums.at(1).size_change.has_value());
+  EXPECT_NEAR(*frame.datums.at(1).size_change, 0.005, 1e-8);
+  EXPECT_LT(frame.datums.at(1).rms, 1e-8);
+  // As the primary datum, an axis fixes four motions.
+  const DatumFrame alone = establish_frame({{"D", {block().hole}}}, block().model, r);
+  ASSERT_TRUE(alone.ok()) << alone.reason;
+  EXPECT_EQ(alone.fixed(), 4);
+}
+
+TEST(DatumFrame, ThreeTwoOnePointsFixEveryMotion) {
+  // The paper's step 1: three points on the bottom, two on the front, one on the left end. The actual part's bottom
+  // is 0.01 mm up, its front 0.02 mm back (−y) and its left end 0.005 mm in (+x): the frame shifts it by
+  // (−0.005, +0.02, −0.01), so its top is 0.01 mm in, its back 0.02 mm out and its right end 0.005 mm in.
+  const Block& b = block();
+  compensation::CompensationResult r;
+  r.registration.transform = registered_pose();
+  for (const Point3& p : {Point3(5, 5, 0.01), Point3(55, 5, 0.01), Point3(20, 35, 0.01)}) add(r, p, b.bottom, 0.001);
+  for (const Point3& p : {Point3(5, -0.02, 10), Point3(55, -0.02, 10)}) add(r, p, b.front, 0.001);
+  add(r, Point3(0.005, 20, 10), b.left, 0.001);
+  for (double y = 5; y <= 35; y += 10) {
+    for (double z = 4; z <= 16; z += 4) add(r, Point3(60, y, z), b.right, 0.001);
+  }
+  const DatumFrame frame = establish_frame({{"A", {b.bottom}}, {"B", {b.front}}, {"C", {b.left}}}, b.model, r);
+  ASSERT_TRUE(frame.ok()) << frame.reason;
+  EXPECT_EQ(frame.datums.at(0).fixes, 3);
+  EXPECT_EQ(frame.datums.at(1).fixes, 2);
+  EXPECT_EQ(frame.datums.at(2).fixes, 1);
+  const CharacteristicResult right = profile(r, b.right, {"A", "B", "C"});
+  ASSERT_NE(right.decision, Decision::NotEvaluated) << right.reason;
+  EXPECT_NEAR(right.min, -0.005, 1e-7);
+  EXPECT_NEAR(right.max, -0.005, 1e-7);
+}
+
+TEST(DatumFrame, ItsUncertaintyIsThatOfTheLeastSquaresPlane) {
+  // n points with standard uncertainty u on the bottom: the least-squares plane's height at (x, y) has the variance
+  // u²(1/n + gᵀS⁻¹g), g = (x − x̄, y − ȳ), S the points' scatter matrix Σ gᵢgᵢᵀ, and the top's
+  // deviation at (x, y) moves with it.
+  const Block& b = block();
+  constexpr double u = 0.002;
+  compensation::CompensationResult r;
+  r.registration.transform = registered_pose();
+  std::vector<Point3> grid;
+  for (double x = 6; x <= 30; x += 6) {
+    for (double y = 8; y <= 32; y += 12) {
+      grid.push_back(Point3(x, y, 0));
+      add(r, grid.back(), b.bottom, u);
+    }
+  }
+  const DatumFrame frame = establish_frame({{"A", {b.bottom}}}, b.model, r);
+  ASSERT_TRUE(frame.ok()) << frame.reason;
+  // The frame leaves the motions in the plane where the registration put them: the points' x and y as it sees them.
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (Point3& p : grid) {
+    p = frame.transform.inverse() * (actual_pose() * p);
+    mean += p.head<2>() / static_cast<double>(grid.size());
+  }
+  Eigen::Matrix2d S = Eigen::Matrix2d::Zero();
+  for (const Point3& p : grid) S += (p.head<2>() - mean) * (p.head<2>() - mean).transpose();
+  registration::Constraints c;
+  c.centre = frame.centre;
+  c.length = frame.length;
+  c.covariance = frame.covariance;
+  for (const Point3& top : {Point3(6, 8, 20), Point3(55, 35, 20), Point3(18, 20, 20)}) {
+    const Eigen::Vector2d g = top.head<2>() - mean;
+    const double expected = u * u * (1.0 / static_cast<double>(grid.size()) + g.dot(S.inverse() * g));
+    EXPECT_NEAR(registration::normal_variance(c, top, Vector3::UnitZ()), expected, 1e-6 * expected);
+  }
+}
+
+TEST(DatumFrame, AFrameThatCannotBeSetUpSaysWhy) {
+  const Block& b = block();
+  const compensation::CompensationResult r = measure(Part{});
+  // The top, parallel to the bottom, fixes nothing the bottom left free.
+  const DatumFrame parallel = establish_frame({{"A", {b.bottom}}, {"T", {b.top}}}, b.model, r);
+  EXPECT_FALSE(parallel.ok());
+  EXPECT_NE(parallel.reason.find("points fix no motion the datums before it left free"), std::string::npos) << parallel.reason;
+  const DatumFrame tangent = establish_frame({{"A", {b.bottom}, DatumFit::Tangent}}, b.model, r);
+  EXPECT_NE(tangent.reason.find("tangent datum fits are not built yet"), std::string::npos) << tangent.reason;
+  compensation::CompensationResult no_left = r;
+  std::erase_if(no_left.points, [&](const compensation::CompensatedPoint& p) { return p.face == b.left; });
+  const CharacteristicResult c = profile(no_left, b.right, {"A", "B", "C"});
+  EXPECT_EQ(c.decision, Decision::NotEvaluated);
+  EXPECT_EQ(c.reason, "datum reference frame A|B|C: datum C: no trusted point on its faces");
+}
+
+}  // namespace
+}  // namespace probecomp::inspection

@@ -1,0 +1,15 @@
+#pragma once
+// Prismatic parts built by OpenCASCADE's modelling (not by probecomp), written to STEP and read back as a model: the
+// datum and characteristic tests measure them against closed forms.
+
+#include "probecomp/cad/model.hpp"
+
+namespace probecomp::testing {
+
+// A 60 × 40 × 20 mm block from the origin along +x, +y, +z, with a through hole of radius 5 along z at (40, 20).
+[[nodiscard]] cad::Model block_with_hole();
+
+// The face whose surface passes through `p` (within 1e-6 mm); throws when none does.
+[[nodiscard]] int face_through(const cad::Model& model, const Point3& p);
+
+}  // namespace probecomp::testing
