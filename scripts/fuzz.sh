@@ -9,7 +9,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-30}
 ./scripts/setup.sh --fuzz
-CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPROBECOMP_FUZZ=ON \
+# A unity build (as the sanitizer build): a target's files compiled in batches, about half the build time.
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPROBECOMP_FUZZ=ON -DCMAKE_UNITY_BUILD=ON \
   -DPROBECOMP_BUILD_TESTS=OFF -DPROBECOMP_BUILD_BENCH=OFF -DPROBECOMP_BUILD_PYTHON=OFF >/dev/null
 targets=(points_csv points_dmis points_qif transform cad_step cad_iges)
 [ $# -gt 1 ] && targets=("${@:2}")
