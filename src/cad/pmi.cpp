@@ -1,7 +1,22 @@
 #include "probecomp/cad/pmi.hpp"
 
 #include <BRep_Builder.hxx>
+#include <Interface_EntityIterator.hxx>
+#include <Interface_Graph.hxx>
+#include <Interface_InterfaceModel.hxx>
 #include <STEPCAFControl_Reader.hxx>
+#include <STEPControl_Reader.hxx>
+#include <StepAP242_ItemIdentifiedRepresentationUsage.hxx>
+#include <StepDimTol_Datum.hxx>
+#include <StepDimTol_DatumTarget.hxx>
+#include <StepRepr_RepresentationItem.hxx>
+#include <StepRepr_ShapeAspect.hxx>
+#include <StepRepr_ShapeAspectRelationship.hxx>
+#include <TCollection_HAsciiString.hxx>
+#include <TransferBRep.hxx>
+#include <Transfer_TransientProcess.hxx>
+#include <XSControl_TransferReader.hxx>
+#include <XSControl_WorkSession.hxx>
 #include <Standard_ErrorHandler.hxx>
 #include <TDF_LabelSequence.hxx>
 #include <TDocStd_Document.hxx>
@@ -62,6 +77,71 @@ bool is_step(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext == ".stp" || ext == ".step";
+}
+
+
+// The datums' faces as the file's entities tie them, where XDE does not (OpenCASCADE 7.6 attaches few datums to
+// shapes: of NIST FTC-06's ten, two). AP242 ties a datum to geometry in one of two ways: an item identified
+// representation usage (a geometric item specific usage, mostly) whose definition is the datum itself, or one whose
+// definition is a datum feature (or datum target) that a shape aspect relationship relates to the datum. Faces come from the items through the reader's transfer map;
+// targets that are points, lines or circles (a target's description) have none and are counted.
+struct EntityDatum {
+  std::vector<TopoDS_Shape> shapes;
+  int point_or_line_targets = 0, area_targets = 0;
+};
+std::map<std::string, EntityDatum> datums_from_entities(const STEPControl_Reader& reader) {
+  std::map<std::string, EntityDatum> out;
+  const Handle(XSControl_WorkSession) ws = reader.WS();
+  const Handle(Interface_InterfaceModel) model = ws->Model();
+  const Handle(Transfer_TransientProcess) process = ws->TransferReader()->TransientProcess();
+  if (model.IsNull() || process.IsNull()) return out;
+  std::vector<std::pair<Handle(StepDimTol_Datum), std::string>> datums;
+  std::multimap<const Standard_Transient*, Handle(StepRepr_RepresentationItem)> items;  // usage: definition → item
+  std::multimap<const Standard_Transient*, Handle(StepRepr_ShapeAspect)> relating;     // datum → its features
+  for (int i = 1; i <= model->NbEntities(); ++i) {
+    const Handle(Standard_Transient) e = model->Value(i);
+    if (const auto datum = Handle(StepDimTol_Datum)::DownCast(e); !datum.IsNull() && !datum->Identification().IsNull()) {
+      datums.emplace_back(datum, datum->Identification()->String().ToCString());
+    } else if (const auto usage = Handle(StepAP242_ItemIdentifiedRepresentationUsage)::DownCast(e); !usage.IsNull()) {
+      const Handle(Standard_Transient) definition = usage->Definition().Value();
+      for (int k = 1; k <= usage->NbIdentifiedItem(); ++k) items.emplace(definition.get(), usage->IdentifiedItemValue(k));
+      if (usage->NbIdentifiedItem() == 0) {
+        // OpenCASCADE 7.6 leaves the items empty where the file gives them as a typed SET_REPRESENTATION_ITEM((...))
+        // (NIST FTC-06's datums B and F); the faces it references are still in the entity graph.
+        for (Interface_EntityIterator shared = ws->Graph().Shareds(e); shared.More(); shared.Next()) {
+          if (const auto item = Handle(StepRepr_RepresentationItem)::DownCast(shared.Value()); !item.IsNull()) {
+            items.emplace(definition.get(), item);
+          }
+        }
+      }
+    } else if (const auto r = Handle(StepRepr_ShapeAspectRelationship)::DownCast(e); !r.IsNull()) {
+      if (!r->RelatedShapeAspect().IsNull() && !r->RelatingShapeAspect().IsNull()) {
+        relating.emplace(r->RelatedShapeAspect().get(), r->RelatingShapeAspect());
+      }
+    }
+  }
+  for (const auto& [datum, name] : datums) {
+    EntityDatum& d = out[name];
+    std::vector<const Standard_Transient*> sources{datum.get()};
+    for (auto [it, end] = relating.equal_range(datum.get()); it != end; ++it) {
+      if (const auto target = Handle(StepDimTol_DatumTarget)::DownCast(it->second); !target.IsNull()) {
+        const std::string kind = target->Description().IsNull() ? "" : target->Description()->String().ToCString();
+        if (kind != "area" && kind != "rectangle" && kind != "circle") {
+          ++d.point_or_line_targets;
+          continue;
+        }
+        ++d.area_targets;
+      }
+      sources.push_back(it->second.get());
+    }
+    for (const Standard_Transient* source : sources) {
+      for (auto [it, end] = items.equal_range(source); it != end; ++it) {
+        const TopoDS_Shape shape = TransferBRep::ShapeResult(process, it->second);
+        if (!shape.IsNull()) d.shapes.push_back(shape);
+      }
+    }
+  }
+  return out;
 }
 
 }  // namespace
@@ -132,16 +212,58 @@ Pmi read_pmi(const std::filesystem::path& path, const Model& model) {
                      std::to_string(model.face_count()) + ": not the same file's faces");
     }
 
-    std::set<std::string> names;
+    // The faces a label (datum, tolerance) refers to, in the model's order.
+    auto faces_of = [&](const TDF_Label& label, std::vector<int>& faces) {
+      TDF_LabelSequence first, second;
+      dimtol->GetRefShapeLabel(label, first, second);
+      for (int k = 1; k <= first.Length(); ++k) {
+        for (TopExp_Explorer f(shapes->GetShape(first.Value(k)), TopAbs_FACE); f.More(); f.Next()) {
+          if (index.IsBound(f.Current())) faces.push_back(index.Find(f.Current()));
+        }
+      }
+      std::sort(faces.begin(), faces.end());
+      faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+    };
+
+    // A datum may come as several labels of one name: its feature, or each of its targets.
+    std::map<std::string, DatumFeature> features;
     TDF_LabelSequence datum_labels;
     dimtol->GetDatumLabels(datum_labels);
     for (int i = 1; i <= datum_labels.Length(); ++i) {
       Handle(XCAFDoc_Datum) d;
-      if (datum_labels.Value(i).FindAttribute(XCAFDoc_Datum::GetID(), d) && !d->GetObject()->GetName().IsNull()) {
-        names.insert(d->GetObject()->GetName()->String().ToCString());
+      if (!datum_labels.Value(i).FindAttribute(XCAFDoc_Datum::GetID(), d) || d->GetObject()->GetName().IsNull()) continue;
+      const Handle(XCAFDimTolObjects_DatumObject) object = d->GetObject();
+      const std::string name = object->GetName()->String().ToCString();
+      DatumFeature& feature = features[name];
+      feature.name = name;
+      const bool target = object->IsDatumTarget();
+      const bool area = target && (object->GetDatumTargetType() == XCAFDimTolObjects_DatumTargetType_Area ||
+                                   object->GetDatumTargetType() == XCAFDimTolObjects_DatumTargetType_Rectangle ||
+                                   object->GetDatumTargetType() == XCAFDimTolObjects_DatumTargetType_Circle);
+      if (target && !area) {
+        ++feature.point_or_line_targets;
+        continue;
+      }
+      if (area) ++feature.area_targets;
+      faces_of(datum_labels.Value(i), feature.faces);
+    }
+    for (const auto& [name, entity] : datums_from_entities(reader.Reader())) {
+      DatumFeature& feature = features[name];
+      feature.name = name;
+      feature.point_or_line_targets = std::max(feature.point_or_line_targets, entity.point_or_line_targets);
+      feature.area_targets = std::max(feature.area_targets, entity.area_targets);
+      for (const TopoDS_Shape& shape : entity.shapes) {
+        for (TopExp_Explorer f(shape, TopAbs_FACE); f.More(); f.Next()) {
+          if (index.IsBound(f.Current())) feature.faces.push_back(index.Find(f.Current()));
+        }
       }
     }
-    out.datums.assign(names.begin(), names.end());
+    for (auto& [name, feature] : features) {
+      std::sort(feature.faces.begin(), feature.faces.end());
+      feature.faces.erase(std::unique(feature.faces.begin(), feature.faces.end()), feature.faces.end());
+      out.datums.push_back(name);
+      out.datum_features.push_back(std::move(feature));
+    }
 
     TDF_LabelSequence tolerance_labels;
     dimtol->GetGeomToleranceLabels(tolerance_labels);
@@ -151,15 +273,7 @@ Pmi read_pmi(const std::filesystem::path& path, const Model& model) {
       const Handle(XCAFDimTolObjects_GeomToleranceObject) object = attr->GetObject();
       GeometricTolerance t;
       t.type = type_of(object->GetType());
-      TDF_LabelSequence first, second;
-      dimtol->GetRefShapeLabel(tolerance_labels.Value(i), first, second);
-      for (int k = 1; k <= first.Length(); ++k) {
-        for (TopExp_Explorer f(shapes->GetShape(first.Value(k)), TopAbs_FACE); f.More(); f.Next()) {
-          if (index.IsBound(f.Current())) t.faces.push_back(index.Find(f.Current()));
-        }
-      }
-      std::sort(t.faces.begin(), t.faces.end());
-      t.faces.erase(std::unique(t.faces.begin(), t.faces.end()), t.faces.end());
+      faces_of(tolerance_labels.Value(i), t.faces);
       // The reference frame: each datum once, by its position in it (primary 1, secondary 2, tertiary 3). Datum
       // targets (A1, A2, A3) come as their datum's name repeated.
       TDF_LabelSequence refs;

@@ -129,7 +129,13 @@ int run_info(const std::string& part, bool json) {
                             {"faces", t.faces},
                             {"datums", t.datums}});
     }
-    info_out["pmi"] = {{"datums", pmi.datums}, {"tolerances", tolerances}, {"warnings", pmi.warnings}};
+    io::Json features = io::Json::array();
+    for (const cad::DatumFeature& d : pmi.datum_features) {
+      features.push_back({{"name", d.name}, {"faces", d.faces}, {"area_targets", d.area_targets},
+                          {"point_or_line_targets", d.point_or_line_targets}});
+    }
+    info_out["pmi"] = {{"datums", pmi.datums}, {"datum_features", features}, {"tolerances", tolerances},
+                       {"warnings", pmi.warnings}};
     out << io::json_text(info_out);
   } else {
     out << "# " << part << ": units mm (file: " << model.file_units << ")\n";

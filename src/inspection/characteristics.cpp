@@ -115,6 +115,16 @@ Specification read_specification(const std::filesystem::path& path, const cad::M
 
 Specification from_pmi(const cad::Pmi& pmi, int& skipped) {
   Specification spec;
+  for (const cad::DatumFeature& d : pmi.datum_features) {
+    if (d.point_or_line_targets > 0) {
+      spec.unusable_datums[d.name] = "datum " + d.name + " is set by " + std::to_string(d.point_or_line_targets) +
+                                     " point or line datum targets, which are not read yet";
+    } else if (d.faces.empty()) {
+      spec.unusable_datums[d.name] = "datum " + d.name + ": its datum feature could not be read from the file";
+    } else {
+      spec.datums.push_back({.name = d.name, .faces = d.faces});
+    }
+  }
   skipped = 0;
   int k = 0;
   for (const cad::GeometricTolerance& t : pmi.tolerances) {
@@ -162,7 +172,8 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
       order.push_back(*d);
     }
     if (!missing.empty()) {
-      not_evaluated("datum " + missing + " has no faces (a STEP file's datum features are not read yet)");
+      const auto why = spec.unusable_datums.find(missing);
+      not_evaluated(why != spec.unusable_datums.end() ? why->second : "datum " + missing + " is not defined");
       continue;
     }
     auto [it, added] = frames.try_emplace(key);

@@ -165,7 +165,6 @@ DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Mode
   for (std::size_t s = 0; s < datums.size(); ++s) {
     const DatumSpec& spec = datums[s];
     const std::string datum = "datum " + spec.name;
-    if (spec.fit == DatumFit::Tangent) return refuse(datum + ": tangent datum fits are not built yet");
     if (points[s].empty()) return refuse(datum + ": no trusted point on its faces");
     if (basis.cols() == 0) return refuse(datum + ": the datums before it already fix every motion");
     cad::Model own;
@@ -176,18 +175,40 @@ DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Mode
     moved.reserve(points[s].size());
     for (const Point3& x : points[s]) moved.push_back(correction * x);
     const std::optional<cad::ElementaryKind> kind = size_kind(nominal, spec.faces);
+    // The least-squares fit, which also tells the motions this datum fixes; a tangent fit starts from it.
     const RestrictedFit fit = fit_in_motions(locator, moved, basis, centre, frame.length, kind.has_value());
     if (!fit.converged) return refuse(datum + ": its fit did not converge");
     if (fit.fixed.cols() == 0) {
       return refuse(datum + ": its " + std::to_string(fit.used.size()) + " points fix no motion the datums before it left free");
     }
-    correction = fit.motion * correction;
-    // First-order propagation: this datum's update is −G (e + J δ_before), G = basis · fixed · Λ⁻¹ · fixedᵀ · Aᵀ.
-    const Eigen::MatrixXd G =
-        basis * (fit.fixed * fit.lambda.cwiseInverse().asDiagonal() * fit.fixed.transpose() * fit.A.transpose());
-    sensitivity = (Eigen::MatrixXd::Identity(6, 6) - G * fit.J) * sensitivity;
-    for (std::size_t r = 0; r < fit.used.size(); ++r) {
-      sensitivity.col(first_column + fit.used[r]) -= G.col(static_cast<Eigen::Index>(r));
+    // What the update of this datum's fit depends on, to first order: it is −G (e + J δ_before), e its points'
+    // distances, δ_before the motion the datums before it made.
+    Eigen::MatrixXd G, J;
+    std::vector<int> used;
+    Eigen::VectorXd residuals;
+    double size = 0.0;
+    if (spec.fit == DatumFit::LeastSquares) {
+      correction = fit.motion * correction;
+      // G = basis · fixed · Λ⁻¹ · fixedᵀ · Aᵀ (the Gauss–Newton solution).
+      G = basis * (fit.fixed * fit.lambda.cwiseInverse().asDiagonal() * fit.fixed.transpose() * fit.A.transpose());
+      J = fit.J;
+      used = fit.used;
+      residuals = fit.d.array() - fit.size;
+      size = fit.size;
+    } else {
+      for (Point3& x : moved) x = fit.motion * x;
+      const TangentFit tangent = fit_tangent(locator, moved, basis * fit.fixed, centre, frame.length, kind.has_value());
+      if (!tangent.converged) return refuse(datum + ": its tangent fit did not converge");
+      correction = tangent.motion * fit.motion * correction;
+      G = -tangent.sensitivity;
+      J = tangent.J;
+      used = tangent.used;
+      residuals = tangent.d;
+      size = tangent.size;
+    }
+    sensitivity = (Eigen::MatrixXd::Identity(6, 6) - G * J) * sensitivity;
+    for (std::size_t r = 0; r < used.size(); ++r) {
+      sensitivity.col(first_column + used[r]) -= G.col(static_cast<Eigen::Index>(r));
     }
     for (std::size_t i = 0; i < points[s].size(); ++i) variance(first_column + static_cast<Eigen::Index>(i)) = u[s][i] * u[s][i];
     first_column += static_cast<Eigen::Index>(points[s].size());
@@ -196,12 +217,12 @@ DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Mode
     d.name = spec.name;
     d.faces = spec.faces;
     d.fit = spec.fit;
-    d.points = static_cast<int>(fit.used.size());
+    d.points = static_cast<int>(used.size());
     d.fixes = static_cast<int>(fit.fixed.cols());
-    d.rms = fit.d.size() > 0 ? std::sqrt((fit.d.array() - fit.size).square().mean()) : 0.0;
+    d.rms = residuals.size() > 0 ? std::sqrt(residuals.array().square().mean()) : 0.0;
     if (kind && !fit.used.empty()) {
       const cad::ModelPoint& foot = fit.feet[static_cast<std::size_t>(fit.used.front())];
-      d.size_change = fit.size * radius_sign(own.faces[static_cast<std::size_t>(foot.face)].analytic->surface(), foot);
+      d.size_change = size * radius_sign(own.faces[static_cast<std::size_t>(foot.face)].analytic->surface(), foot);
     }
     frame.datums.push_back(std::move(d));
     basis = basis * fit.free;

@@ -39,3 +39,28 @@ struct RestrictedFit {
                                            bool size_free);
 
 }  // namespace probecomp::inspection
+
+namespace probecomp::inspection {
+
+// The tangent fit (ISO 5459's constrained minimax; ASME Y14.5.1): from where the least-squares fit left `points`,
+// moved within `fixed` (the directions that fit found fixed), so that every point lies on the material side of the
+// faces and, with the size free (a hole, a pin, a sphere), the faces offset by the least amount that keeps them
+// there (the largest inscribed or smallest circumscribed feature); without it, the largest distance into the
+// material is the least (a plane touching the high points, the outer plane of its minimum zone). Sequential linear
+// programs (linear_program.hpp), each on the distances linearised where the last left the points.
+struct TangentFit {
+  bool converged = false;
+  int iterations = 0;
+  geometry::RigidTransform motion = geometry::RigidTransform::Identity();  // applied to the points given
+  std::vector<int> used;  // the points fitted (found, not past an edge), at the end
+  Eigen::MatrixXd J;      // used × 6, at the end
+  Eigen::VectorXd d;      // used: signed distances from the faces at the end (from the offset faces: d − size), mm
+  double size = 0.0;      // with the size free: the offset along the outward normal, mm
+  // ∂(motion's scaled twist)/∂(each used point's distance), 6 × used: the few points the fit rests on have columns.
+  Eigen::MatrixXd sensitivity;
+};
+
+[[nodiscard]] TangentFit fit_tangent(const cad::ModelLocator& faces, std::span<const Point3> points,
+                                     const MotionBasis& fixed, const Point3& centre, double length, bool size_free);
+
+}  // namespace probecomp::inspection

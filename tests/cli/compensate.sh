@@ -84,21 +84,25 @@ if [ "$LIGHT" != light ]; then
 # --characteristics: a surface profile without datums on the demo's panel (its form after a best fit of its own
 # points: the dent and bulge, about 2 mm wide a zone), judged with U = 2u. With the panel itself as datum A (least
 # squares: it fixes all six motions), the same points in that frame are the same best fit: the same value, and a u
-# with the datum's share added. A tangent datum is not built yet: not evaluated, and why. pmi on an IGES file, refused.
+# with the datum's share added. With the panel as a tangent datum B, every point lies on the material side of it and
+# the deepest as shallow as can be: max <= 0, and the deepest no deeper than the least-squares frame's zone is wide
+# (that frame moved out to touch would be a tangent one). pmi on an IGES file, refused.
 printf '{"datums": {"A": {"faces": [0]}, "B": {"faces": [0], "fit": "tangent"}}, "characteristics": [
   {"name": "P1", "faces": [0], "tolerance": 3.0}, {"name": "P2", "faces": [0], "tolerance": 0.001},
   {"name": "P3", "faces": [0], "tolerance": 3.0, "datums": ["A"]}, {"name": "P4", "faces": [0], "tolerance": 3.0, "datums": ["B"]}]}' >"$W/spec.json"
 "$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 --characteristics "$W/spec.json" \
   --output "$W/spec.csv" --json "$W/spec_stats.json" --quiet 2>"$W/spec.err" || { echo "FAIL: --characteristics"; fail=1; }
-json_check "$W/spec_stats.json" "[c['decision'] for c in j['characteristics']] == ['conforms', 'does-not-conform', 'conforms', 'not-evaluated']" \
-  "--characteristics: a wide zone conforms, a 1 um one does not, in datum A's frame it conforms, a tangent datum is not evaluated" || fail=1
+json_check "$W/spec_stats.json" "[c['decision'] for c in j['characteristics']][:3] == ['conforms', 'does-not-conform', 'conforms']" \
+  "--characteristics: a wide zone conforms, a 1 um one does not, in datum A's frame it conforms" || fail=1
+json_check "$W/spec_stats.json" "j['characteristics'][3]['decision'] != 'not-evaluated' and j['characteristics'][3]['max'] <= 1e-6 and -j['characteristics'][3]['min'] <= j['characteristics'][0]['max'] - j['characteristics'][0]['min']" \
+  "--characteristics: in the frame of the panel as a tangent datum, every point inside the material" || fail=1
 json_check "$W/spec_stats.json" "abs(j['characteristics'][0]['value'] - 2 * max(-j['characteristics'][0]['min'], j['characteristics'][0]['max'])) < 1e-6 and j['characteristics'][0]['points'] == 7200" \
   "--characteristics: the profile's value, the centred zone holding all 7 200 points" || fail=1
 json_check "$W/spec_stats.json" "abs(j['characteristics'][2]['value'] - j['characteristics'][0]['value']) < 1e-6 and j['characteristics'][2]['u'] > j['characteristics'][0]['u']" \
   "--characteristics: in the frame of the panel as datum, the same value and a larger u" || fail=1
-json_check "$W/spec_stats.json" "[(d['name'], d['frame'], d['fixes'], d['points']) for d in j['datums']] == [('A', 'A', 6, 7200)]" \
+json_check "$W/spec_stats.json" "[(d['name'], d['frame'], d['fit'], d['fixes'], d['points']) for d in j['datums']] == [('A', 'A', 'least-squares', 6, 7200), ('B', 'B', 'tangent', 6, 7200)]" \
   "--characteristics: the datums fitted, in --json" || fail=1
-check "grep -q 'probecomp: P4: not-evaluated (datum reference frame B: datum B: tangent datum fits are not built yet)' '$W/spec.err'" "--characteristics: the reason on standard error"
+check "grep -q 'probecomp: P4: conforms (value' '$W/spec.err'" "--characteristics: the decisions on standard error"
 expect_error "no semantic PMI" "$W/pmi.csv" "$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 --characteristics pmi --output "$W/pmi.csv"
 # info: a STEP AP242 file's semantic PMI; magnitudes OpenCASCADE does not read are named, not printed as 0.
 "$P" info "$CAD/nist_ftc_06_asme1_ap242-e2.stp" --json >"$W/ftc06.json" 2>"$W/ftc06.err" || { echo "FAIL: info ftc06"; fail=1; }

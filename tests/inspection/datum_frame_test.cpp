@@ -95,7 +95,7 @@ CharacteristicResult profile(const compensation::CompensationResult& r, int face
   const Block& b = block();
   Specification spec;
   spec.datums = {{"A", {b.bottom}}, {"B", {b.front}}, {"C", {b.left}}, {"D", {b.hole}}, {"T", {b.top}}};
-  spec.characteristics = {{.name = "P", .faces = {face}, .tolerance = 0.1, .datums = std::move(datums)}};
+  spec.characteristics = {{.name = "P", .faces = {face}, .tolerance = 0.1, .outside = {}, .datums = std::move(datums)}};
   return evaluate(spec, b.model, r).characteristics.at(0);
 }
 
@@ -278,6 +278,88 @@ TEST(DatumFrame, ItsUncertaintyIsThatOfTheLeastSquaresPlane) {
   }
 }
 
+TEST(DatumFrame, ATangentPlaneRestsOnTheOutermostPoints) {
+  // The bottom is dished: its points lie at z = −k r², r from (30, 20), lowest (outermost) at the grid's four
+  // corners, r² = 25² + 15². A tangent datum rests the part on them (a surface plate's contact: horizontal by
+  // symmetry, every point inside the material), so the top, 20 mm above, is k·850 out. Least squares puts the
+  // datum on the points' least-squares plane z = a + bx + cy instead (solved here by QR): the top's point (x, y) is
+  // −(a + bx + cy) out, to first order in the plane's slopes (about 1e-6: the rest is below 1e-9 mm).
+  constexpr double k = 1e-5;
+  Part part;
+  part.bottom = [](const Point3& p) { return Point3(p.x(), p.y(), -k * (std::pow(p.x() - 30, 2) + std::pow(p.y() - 20, 2))); };
+  const compensation::CompensationResult r = measure(part);
+  const Block& b = block();
+  std::vector<Point3> grid;
+  for (double x = 5; x <= 55; x += 5) {
+    for (double y = 5; y <= 35; y += 5) {
+      if (std::hypot(x - 40, y - 20) >= 7) grid.push_back(part.bottom(Point3(x, y, 0)));
+    }
+  }
+  Eigen::MatrixXd M(grid.size(), 3);
+  Eigen::VectorXd z(grid.size());
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    M.row(static_cast<Eigen::Index>(i)) << 1.0, grid[i].x(), grid[i].y();
+    z(static_cast<Eigen::Index>(i)) = grid[i].z();
+  }
+  const Eigen::Vector3d plane = M.colPivHouseholderQr().solve(z);
+  double ls_min = INFINITY, ls_max = -INFINITY;
+  for (const Point3& p : grid) {
+    const double d = -(plane(0) + plane(1) * p.x() + plane(2) * p.y());
+    ls_min = std::min(ls_min, d);
+    ls_max = std::max(ls_max, d);
+  }
+  Specification spec;
+  spec.datums = {{"A", {b.bottom}, DatumFit::Tangent}, {"L", {b.bottom}}};
+  spec.characteristics = {{.name = "T", .faces = {b.top}, .tolerance = 0.1, .outside = {}, .datums = {"A"}},
+                          {.name = "L", .faces = {b.top}, .tolerance = 0.1, .outside = {}, .datums = {"L"}}};
+  const Inspection judged = evaluate(spec, b.model, r);
+  const CharacteristicResult& tangent = judged.characteristics.at(0);
+  const CharacteristicResult& least_squares = judged.characteristics.at(1);
+  ASSERT_NE(tangent.decision, Decision::NotEvaluated) << tangent.reason;
+  EXPECT_NEAR(tangent.min, k * 850, 1e-7);
+  EXPECT_NEAR(tangent.max, k * 850, 1e-7);
+  EXPECT_NEAR(least_squares.min, ls_min, 1e-7);
+  EXPECT_NEAR(least_squares.max, ls_max, 1e-7);
+  const DatumResult& a = judged.datums.at(0).datum;
+  EXPECT_EQ(a.fit, DatumFit::Tangent);
+  EXPECT_EQ(a.fixes, 3);
+  // The tangent datum rests on four points: the datum's share of the top's u is theirs, not the mean of 72.
+  const DatumFrame frame = establish_frame({spec.datums[0]}, b.model, r);
+  ASSERT_TRUE(frame.ok()) << frame.reason;
+  registration::Constraints c;
+  c.centre = frame.centre;
+  c.length = frame.length;
+  c.covariance = frame.covariance;
+  const DatumFrame ls = establish_frame({spec.datums[1]}, b.model, r);
+  registration::Constraints cl = c;
+  cl.covariance = ls.covariance;
+  EXPECT_GT(registration::normal_variance(c, Point3(30, 20, 20), Vector3::UnitZ()),
+            2 * registration::normal_variance(cl, Point3(30, 20, 20), Vector3::UnitZ()));
+}
+
+TEST(DatumFrame, ATangentHoleIsItsLargestInscribedCylinder) {
+  // The hole's radius is 5.005 + 0.003 cos 3φ about (40.02, 19.99): its twelve points per height reach in to 5.002
+  // at φ = 60°, 180° and 300°, three contacts 120° apart, so the largest inscribed cylinder is centred on the axis
+  // with radius 5.002 (least squares: 5.005). Either moves the part by (−0.02, +0.01).
+  Part part;
+  part.hole = [](const Point3& p) -> Point3 {
+    const double phi = std::atan2(p.y() - 20, p.x() - 40);
+    return Point3(40.02, 19.99, p.z()) + (5.005 + 0.003 * std::cos(3 * phi)) * Vector3(std::cos(phi), std::sin(phi), 0);
+  };
+  const compensation::CompensationResult r = measure(part);
+  const Block& b = block();
+  for (const DatumFit fit : {DatumFit::Tangent, DatumFit::LeastSquares}) {
+    const DatumFrame frame = establish_frame({{"A", {b.bottom}}, {"D", {b.hole}, fit}}, b.model, r);
+    ASSERT_TRUE(frame.ok()) << frame.reason;
+    ASSERT_TRUE(frame.datums.at(1).size_change.has_value());
+    EXPECT_NEAR(*frame.datums.at(1).size_change, fit == DatumFit::Tangent ? 0.002 : 0.005, 1e-8) << to_string(fit);
+    // The hole's axis goes to (40, 20): the actual axis point (40.02, 19.99, 10) lands there.
+    const Point3 axis = frame.transform.inverse() * (actual_pose() * Point3(40.02, 19.99, 10));
+    EXPECT_NEAR(axis.x(), 40.0, 1e-8) << to_string(fit);
+    EXPECT_NEAR(axis.y(), 20.0, 1e-8) << to_string(fit);
+  }
+}
+
 TEST(DatumFrame, AFrameThatCannotBeSetUpSaysWhy) {
   const Block& b = block();
   const compensation::CompensationResult r = measure(Part{});
@@ -285,8 +367,6 @@ TEST(DatumFrame, AFrameThatCannotBeSetUpSaysWhy) {
   const DatumFrame parallel = establish_frame({{"A", {b.bottom}}, {"T", {b.top}}}, b.model, r);
   EXPECT_FALSE(parallel.ok());
   EXPECT_NE(parallel.reason.find("points fix no motion the datums before it left free"), std::string::npos) << parallel.reason;
-  const DatumFrame tangent = establish_frame({{"A", {b.bottom}, DatumFit::Tangent}}, b.model, r);
-  EXPECT_NE(tangent.reason.find("tangent datum fits are not built yet"), std::string::npos) << tangent.reason;
   compensation::CompensationResult no_left = r;
   std::erase_if(no_left.points, [&](const compensation::CompensatedPoint& p) { return p.face == b.left; });
   const CharacteristicResult c = profile(no_left, b.right, {"A", "B", "C"});

@@ -25,9 +25,20 @@ struct GeometricTolerance {
   std::vector<std::string> datums;  // the datum reference frame, primary first (each name once)
 };
 
+// A datum as the file defines it: the faces of its datum feature, or datum targets.
+struct DatumFeature {
+  std::string name;
+  std::vector<int> faces;  // the datum feature's faces (positions in the model's faces), sorted
+  // Datum targets (A1, A2, ...): points, lines or areas on the part rather than a whole feature. Areas tie to faces
+  // like a feature; points and lines do not, and are counted here.
+  int point_or_line_targets = 0;
+  int area_targets = 0;
+};
+
 struct Pmi {
   std::vector<GeometricTolerance> tolerances;
   std::vector<std::string> datums;    // every datum the file names, sorted, each once
+  std::vector<DatumFeature> datum_features;  // the same datums with their faces, in the same order
   std::vector<std::string> warnings;  // one line each: what could not be read
 };
 

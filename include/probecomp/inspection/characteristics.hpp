@@ -5,6 +5,7 @@
 // own points (least squares) first.
 
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,6 +28,9 @@ struct CharacteristicSpec {
 
 struct Specification {
   std::vector<DatumSpec> datums;  // as the file defines them, in its order
+  // Datums named but not usable, with why (a STEP file's datum set by point or line targets): a characteristic that
+  // refers to one is not evaluated, with that reason.
+  std::map<std::string, std::string> unusable_datums;
   std::vector<CharacteristicSpec> characteristics;
 };
 
@@ -36,9 +40,9 @@ struct Specification {
 [[nodiscard]] Specification read_specification(const std::filesystem::path& path, const cad::Model& model);
 
 // The characteristics a STEP AP242 file's PMI states (cad/pmi.hpp): each profile of surface and flatness as a
-// surface profile on its faces (datums as the file gives them, without their faces: the file's datum features are
-// not read yet, so such a characteristic is not evaluated, with that reason). One whose magnitude could not be read
-// has a tolerance of 0, which evaluate() reports as not evaluated, with that reason. The others (positions,
+// surface profile on its faces, in the datum reference frame the file gives it; each datum a least-squares fit of its
+// datum feature's faces (or target areas). A datum set by point or line targets is unusable, with that reason. One
+// whose magnitude could not be read has a tolerance of 0, which evaluate() reports as not evaluated, with that reason. The others (positions,
 // perpendicularities, ...) are not characteristics of this step and are counted in `skipped`.
 [[nodiscard]] Specification from_pmi(const cad::Pmi& pmi, int& skipped);
 

@@ -1,7 +1,9 @@
 #pragma once
 // Datum reference frames (ISO 5459, ASME Y14.5; DESIGN.md §7) set up on the compensated contact points. A datum is
-// the nominal shape of its faces fitted to the trusted points on them: least squares, a cylinder's or sphere's size
-// free (a hole's datum is its axis, whatever its measured radius). Datums are taken in order, each moving the part
+// the nominal shape of its faces fitted to the trusted points on them, a cylinder's or sphere's size free (a hole's
+// datum is its axis, whatever its measured radius): least squares, or tangent (every point on the material side,
+// the deepest as shallow as can be: a plane resting on the high points, a hole's largest inscribed cylinder, a
+// pin's smallest circumscribed one). Datums are taken in order, each moving the part
 // only in the motions the ones before it left free: the primary fixes what its feature can (a plane: one
 // translation and two rotations; a cylinder: two translations and two rotations), the secondary then the tertiary
 // fix what remains. Which motions a feature fixes is read from its points, as registration/constraints.hpp does for
@@ -55,12 +57,11 @@ struct DatumFrame {
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
 
   [[nodiscard]] bool ok() const { return status == Status::OK; }
-  [[nodiscard]] int fixed() const { return 6 - static_cast<int>(free_basis.cols()); }
+  [[nodiscard]] int fixed() const { return ok() ? 6 - static_cast<int>(free_basis.cols()) : 0; }  // motions fixed
 };
 
 // The frame of `datums` (primary first) on `result`'s ok points. NotDone, with the reason, when a datum has no
-// trusted point, fixes no motion the ones before it left, its fit does not converge, or a fit is not built yet
-// (tangent).
+// trusted point, fixes no motion the ones before it left, or its fit does not converge.
 [[nodiscard]] DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Model& nominal,
                                          const compensation::CompensationResult& result);
 

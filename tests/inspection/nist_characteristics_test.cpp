@@ -1,0 +1,162 @@
+// The drawing's own characteristics on a simulated measurement of a NIST test part (FTC-06, STEP AP242 with semantic
+// GD&T): --characteristics pmi's path. The actual part is the nominal with some toleranced faces moved along their
+// normals by known amounts, placed 0.4 mm and 0.6° off; 10–40 touches a face (r = 1 mm, σ = 2 µm). Faces that are
+// datum features are not moved, so each datum frame is the true placement and a moved face's deviations are its
+// move: inside its zone, outside it, and exactly at its limit (indeterminate).
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <map>
+#include <optional>
+#include <set>
+
+#include "probecomp/cad/analytic.hpp"
+#include "probecomp/cad/offset_model.hpp"
+#include "probecomp/cad/plan.hpp"
+#include "probecomp/cad/pmi.hpp"
+#include "probecomp/inspection/characteristics.hpp"
+#include "probecomp/simulation/measure.hpp"
+#include "support/data_files.hpp"
+
+namespace probecomp::inspection {
+namespace {
+
+// 10 to 40 points inside each face's trim: a plan at a spacing halved until the face holds 10, thinned evenly to 40.
+std::vector<simulation::ProgrammedPoint> sparse_plan(const cad::Model& model, const std::set<int>& faces) {
+  std::vector<simulation::ProgrammedPoint> plan;
+  for (int f : faces) {
+    std::vector<cad::PlannedPoint> points;
+    for (double spacing = 8.0; spacing > 0.2; spacing /= 2) {
+      points = cad::plan_points(model, spacing, {f});
+      if (points.size() >= 10) break;
+    }
+    const std::size_t stride = std::max<std::size_t>(1, (points.size() + 39) / 40);
+    for (std::size_t k = 0; k < points.size(); k += stride) plan.push_back({points[k].point, points[k].normal, f});
+  }
+  return plan;
+}
+
+// Returns how many characteristics were evaluated; each not evaluated must be for a datum the file does not tie to
+// faces.
+int judge_as_moved(const std::filesystem::path& file) {
+  const cad::Model nominal = cad::read_model(file);
+  const cad::Pmi pmi = cad::read_pmi(file, nominal);
+  int skipped = 0;
+  const Specification spec = from_pmi(pmi, skipped);
+  std::set<int> datum_faces, measured;
+  for (const DatumSpec& d : spec.datums) datum_faces.insert(d.faces.begin(), d.faces.end());
+  measured = datum_faces;
+  for (const CharacteristicSpec& c : spec.characteristics) measured.insert(c.faces.begin(), c.faces.end());
+  std::vector<simulation::ProgrammedPoint> plan = sparse_plan(nominal, measured);
+  // Which frames fix all six motions: set up on the plan's own (nominal) points.
+  compensation::CompensationResult exact;
+  for (const simulation::ProgrammedPoint& p : plan) {
+    compensation::CompensatedPoint q;
+    q.status = compensation::PointStatus::Ok;
+    q.contact = p.point;
+    q.face = p.face;
+    q.uncertainty = 0.001;
+    exact.points.push_back(q);
+  }
+  // A characteristic in a complete frame, on faces that are no datum's, gets a move: a quarter of its zone out, three
+  // quarters (past the limit t/2), or exactly t/2; on a cylinder or sphere only where that stays within 0.3 mm
+  // (further, a hole's or boss's radius would be off by more than its sparse points are fitted as that element
+  // with, and they would not be trusted). In a frame that leaves motions free, its own best fit would take some of a move up: such a
+  // characteristic on moved faces is only printed, and one on faces not moved must read 0.
+  std::map<int, double> moved;                 // face → outward move, mm
+  std::map<std::string, std::optional<double>> truth;  // characteristic → its faces' deviation, where known
+  std::map<std::string, bool> complete;
+  int k = 0;
+  for (const CharacteristicSpec& c : spec.characteristics) {
+    std::vector<DatumSpec> order;
+    for (const std::string& name : c.datums) {
+      for (const DatumSpec& d : spec.datums) {
+        if (d.name == name) order.push_back(d);
+      }
+    }
+    const DatumFrame frame = establish_frame(order, nominal, exact);
+    complete[c.name] = !c.datums.empty() && order.size() == c.datums.size() && frame.fixed() == 6;
+    const double move = std::array{0.25, 0.75, 0.5}[static_cast<std::size_t>(k % 3)] * c.tolerance;
+    bool free = complete[c.name];
+    for (int f : c.faces) {
+      const cad::Face& face = nominal.faces[static_cast<std::size_t>(f)];
+      const bool sized = face.analytic && (face.analytic->surface().kind == cad::ElementaryKind::Cylinder ||
+                                           face.analytic->surface().kind == cad::ElementaryKind::Sphere);
+      free = free && !datum_faces.contains(f) && !moved.contains(f) && (!sized || move <= 0.3);
+    }
+    if (!free) continue;
+    ++k;
+    for (int f : c.faces) moved[f] = move;
+  }
+  for (const CharacteristicSpec& c : spec.characteristics) {
+    std::optional<double> move = 0.0;
+    for (int f : c.faces) {
+      if (moved.contains(f)) move = complete[c.name] ? std::optional<double>(moved[f]) : std::nullopt;
+    }
+    truth[c.name] = move;
+  }
+  cad::Model actual = nominal;
+  for (const auto& [f, move] : moved) {
+    cad::Model one;
+    one.faces = {nominal.faces[static_cast<std::size_t>(f)]};
+    const cad::OffsetModel offset = cad::offset_model(one, move);
+    EXPECT_EQ(offset.failed(), 0) << "face " << f;
+    actual.faces[static_cast<std::size_t>(f)] = offset.model.faces.front();
+  }
+  const geometry::RigidTransform placement =
+      Eigen::Translation3d(0.3, -0.2, 0.15) * Eigen::AngleAxisd(0.6 * M_PI / 180, Vector3(1, -2, 2).normalized());
+  const cad::Model placed = simulation::actual_model(actual, {}, placement);
+  const std::vector<simulation::Touch> touches =
+      simulation::simulate_touches(cad::ModelLocator(placed), plan, {.probe_radius = 1.0, .noise_sigma = 0.002, .seed = 7});
+  std::vector<Point3> centres;
+  std::vector<Vector3> normals;
+  for (std::size_t i = 0; i < touches.size(); ++i) {
+    if (touches[i].status == simulation::Touch::Status::Missed) continue;
+    centres.push_back(touches[i].measured);
+    normals.push_back(plan[i].normal);
+  }
+  compensation::CompensateOptions options;
+  options.probe_radius = 1.0;
+  const compensation::CompensationResult result = compensation::compensate(nominal, centres, normals, options);
+  const Inspection judged = evaluate(spec, nominal, result);
+  std::printf("%zu touches on %zu faces, %zu characteristics, %zu datums fitted\n", centres.size(), measured.size(),
+              judged.characteristics.size(), judged.datums.size());
+  int evaluated = 0;
+  for (const CharacteristicResult& c : judged.characteristics) {
+    const std::optional<double> known = truth.at(c.spec.name);
+    const double t = known.value_or(NAN);
+    std::string frame;
+    for (const std::string& d : c.spec.datums) frame += (frame.empty() ? "" : "|") + d;
+    std::printf("  %-12s %-6s t %.4f  move %+.4f  min %+.4f max %+.4f  U %.4f  %s %s\n", c.spec.name.c_str(),
+                frame.c_str(), c.spec.tolerance, t, c.min, c.max, c.u, to_string(c.decision), c.reason.c_str());
+    if (c.decision == Decision::NotEvaluated) {
+      EXPECT_NE(c.reason.find("could not be read from the file"), std::string::npos) << c.spec.name << ": " << c.reason;
+      continue;
+    }
+    ++evaluated;
+    if (!known) continue;
+    EXPECT_NEAR(c.min, t, 0.010) << c.spec.name;
+    EXPECT_NEAR(c.max, t, 0.010) << c.spec.name;
+    const double limit = 0.5 * c.spec.tolerance;
+    const Decision expected = t == limit ? Decision::Indeterminate : t > limit ? Decision::DoesNotConform : Decision::Conforms;
+    EXPECT_EQ(c.decision, expected) << c.spec.name;
+  }
+  return evaluated;
+}
+
+TEST(NistCharacteristics, StcSixsProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay) {
+  EXPECT_GT(judge_as_moved(test::kCadDir / "nist_stc_06_asme1_ap242-e3.stp"), 0);
+}
+
+TEST(NistCharacteristics, CtcFoursProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay) {
+  EXPECT_GT(judge_as_moved(test::kCadDir / "nist_ctc_04_asme1_ap242-e1.stp"), 0);
+}
+
+TEST(NistCharacteristics, FtcSixsProfilesOnItsUnreadDatumsSaySo) {
+  EXPECT_GT(judge_as_moved(test::kCadDir / "nist_ftc_06_asme1_ap242-e2.stp"), 0);
+}
+
+}  // namespace
+}  // namespace probecomp::inspection
