@@ -13,8 +13,8 @@ namespace probecomp::inspection {
 namespace {
 
 // The linear programs' vertices move the points by less than this (mm) when the linearisation has settled.
-constexpr double kMotionTolerance = 1e-10;
-constexpr int kMaxIterations = 30;
+constexpr double kSettledMotion = 1e-10;
+constexpr int kMaxLinearPrograms = 30;
 
 }  // namespace
 
@@ -23,7 +23,7 @@ TangentFit fit_tangent(const cad::ModelLocator& faces, std::span<const Point3> p
   TangentFit fit;
   std::vector<Point3> moved(points.begin(), points.end());
   const Eigen::Index f = fixed.cols(), p = f + 1;
-  for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
+  for (int iteration = 0; iteration < kMaxLinearPrograms; ++iteration) {
     fit.iterations = iteration + 1;
     const std::vector<cad::ModelPoint> feet = faces.closest_points(moved);
     fit.used.clear();
@@ -89,7 +89,7 @@ TangentFit fit_tangent(const cad::ModelLocator& faces, std::span<const Point3> p
       x = y;
     }
     fit.motion = step * fit.motion;
-    if (largest <= kMotionTolerance) {
+    if (largest <= kSettledMotion) {
       // The last step moved nothing that matters: the distances above are the end's, less the offset faces' size.
       fit.d = fit.d + A * m;
       if (size_free) fit.d.array() -= fit.size;

@@ -19,6 +19,7 @@
 #include "probecomp/inspection/characteristics.hpp"
 #include "probecomp/simulation/measure.hpp"
 #include "support/data_files.hpp"
+#include "support/light.hpp"
 
 namespace probecomp::inspection {
 namespace {
@@ -151,6 +152,7 @@ TEST(NistCharacteristics, StcSixsProfilesAreJudgedInTheirDatumFramesAsTheirMoves
 }
 
 TEST(NistCharacteristics, CtcFoursProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay) {
+  if (test::kLight) GTEST_SKIP() << "the sanitizer build runs STC-06's, through the same code";
   EXPECT_GT(judge_as_moved(test::kCadDir / "nist_ctc_04_asme1_ap242-e1.stp"), 0);
 }
 
