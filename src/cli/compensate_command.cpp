@@ -241,6 +241,15 @@ int run_compensate(const CompensateArgs& a) {
     }
     bar.print(line);
   }
+  if (judged.alignment_frame) {
+    // The whole output in the datum frame the specification asks for, or none: a best fit in its place would be
+    // read as that frame.
+    if (!judged.alignment_frame->ok()) {
+      throw std::invalid_argument(a.characteristics + ": alignment " + judged.alignment + ": " + judged.alignment_frame->reason);
+    }
+    write_outputs(a, l, inspection::aligned(r, *judged.alignment_frame, l.model), judged, bar);
+    return 0;
+  }
   write_outputs(a, l, r, judged, bar);
   return 0;
 }

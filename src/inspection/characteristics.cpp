@@ -79,7 +79,18 @@ Specification read_specification(const std::filesystem::path& path, const cad::M
       datums.insert(name);
     }
   }
-  if (j.contains("alignment")) bad(path, "\"alignment\" (the output in a datum frame) is not supported yet");
+  if (j.contains("alignment")) {
+    try {
+      for (const nlohmann::json& d : j["alignment"]) {
+        const std::string name = d.get<std::string>();
+        if (!datums.contains(name)) bad(path, "alignment: datum " + name + " is not defined under \"datums\"");
+        spec.alignment.push_back(name);
+      }
+    } catch (const nlohmann::json::exception& e) {
+      bad(path, std::string("alignment: ") + e.what());
+    }
+    if (spec.alignment.empty()) bad(path, "alignment: no datums (leave it out for the best fit of all points)");
+  }
   int k = 0;
   for (const nlohmann::json& c : j["characteristics"]) {
     ++k;
@@ -243,6 +254,19 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
     }
     c.decision = outside_surely ? Decision::DoesNotConform : inside ? Decision::Conforms : Decision::Indeterminate;
     out.characteristics.push_back(std::move(c));
+  }
+  if (!spec.alignment.empty()) {
+    std::vector<DatumSpec> order;
+    for (const std::string& name : spec.alignment) {
+      if (!out.alignment.empty()) out.alignment += '|';
+      out.alignment += name;
+      const auto d = std::find_if(spec.datums.begin(), spec.datums.end(), [&](const DatumSpec& x) { return x.name == name; });
+      if (d != spec.datums.end()) order.push_back(*d);
+    }
+    out.alignment_frame = establish_frame(order, nominal, result);
+    if (out.alignment_frame->ok() && !frames.contains(out.alignment)) {
+      for (const DatumResult& d : out.alignment_frame->datums) out.datums.push_back({out.alignment, d});
+    }
   }
   return out;
 }

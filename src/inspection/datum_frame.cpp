@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 
 #include <Eigen/Eigenvalues>
@@ -234,6 +235,26 @@ DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Mode
   frame.transform = result.registration.transform * correction.inverse();
   frame.status = DatumFrame::Status::OK;
   return frame;
+}
+
+compensation::CompensationResult aligned(const compensation::CompensationResult& result, const DatumFrame& frame,
+                                         const cad::Model& nominal) {
+  compensation::CompensationResult out = result;
+  out.registration.transform = frame.transform;
+  const geometry::RigidTransform to_cad = frame.transform.inverse();
+  std::vector<Point3> points;
+  std::vector<std::size_t> rows;
+  for (std::size_t k = 0; k < result.points.size(); ++k) {
+    if (!result.points[k].computed()) continue;
+    points.push_back(to_cad * result.points[k].contact);
+    rows.push_back(k);
+  }
+  const std::vector<cad::ModelPoint> feet = cad::ModelLocator(nominal).closest_points(points);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    out.points[rows[i]].deviation = feet[i].ok() ? feet[i].distance : std::numeric_limits<double>::quiet_NaN();
+  }
+  out.statistics = compensation::statistics(out.points);
+  return out;
 }
 
 }  // namespace probecomp::inspection

@@ -195,6 +195,9 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
     }
     j["datums"] = list;
   }
+  if (inspection != nullptr && inspection->alignment_frame && inspection->alignment_frame->ok()) {
+    j["alignment"] = {{"frame", inspection->alignment}, {"fixed", inspection->alignment_frame->fixed()}};
+  }
   if (inspection != nullptr && !inspection->characteristics.empty()) {
     Json list = Json::array();
     for (const inspection::CharacteristicResult& c : inspection->characteristics) {

@@ -103,6 +103,12 @@ json_check "$W/spec_stats.json" "abs(j['characteristics'][2]['value'] - j['chara
 json_check "$W/spec_stats.json" "[(d['name'], d['frame'], d['fit'], d['fixes'], d['points']) for d in j['datums']] == [('A', 'A', 'least-squares', 6, 7200), ('B', 'B', 'tangent', 6, 7200)]" \
   "--characteristics: the datums fitted, in --json" || fail=1
 check "grep -q 'probecomp: P4: conforms (value' '$W/spec.err'" "--characteristics: the decisions on standard error"
+# alignment: the whole output in datum A's frame (the panel's least-squares fit): its deviations are that frame's.
+sed 's/"characteristics"/"alignment": ["A"], "characteristics"/' "$W/spec.json" >"$W/aligned.json"
+"$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 --characteristics "$W/aligned.json" \
+  --output "$W/aligned.csv" --json "$W/aligned_stats.json" --quiet 2>/dev/null || { echo "FAIL: alignment"; fail=1; }
+json_check "$W/aligned_stats.json" "j['alignment'] == {'frame': 'A', 'fixed': 6} and abs(j['deviation']['max'] - j['characteristics'][2]['max']) < 1e-6 and abs(j['deviation']['min'] - j['characteristics'][2]['min']) < 1e-6" \
+  "alignment: the deviation column in datum A's frame, its extremes those of the profile in that frame" || fail=1
 expect_error "no semantic PMI" "$W/pmi.csv" "$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 --characteristics pmi --output "$W/pmi.csv"
 # info: a STEP AP242 file's semantic PMI; magnitudes OpenCASCADE does not read are named, not printed as 0.
 "$P" info "$CAD/nist_ftc_06_asme1_ap242-e2.stp" --json >"$W/ftc06.json" 2>"$W/ftc06.err" || { echo "FAIL: info ftc06"; fail=1; }

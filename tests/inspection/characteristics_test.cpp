@@ -122,8 +122,9 @@ TEST(Characteristics, ABadSpecificationIsRefusedNamingTheFileAndTheCause) {
   refused(R"({"datums": {"A": {}}, "characteristics": []})", "datum A: no \"faces\"");
   refused(R"({"datums": {"A": {"faces": [7]}}, "characteristics": []})", "datum A: face 7 is not in the model");
   refused(R"({"datums": {"A": {"faces": [0], "fit": "minimum-zone"}}, "characteristics": []})", "unknown fit \"minimum-zone\"");
-  refused(R"({"datums": {"A": {"faces": [0]}}, "alignment": ["A"], "characteristics": []})", "\"alignment\"");
-  std::ofstream(path) << R"({"datums": {"A": {"faces": [0], "fit": "tangent"}}, "characteristics": [{"name": "P", "faces": [0], "tolerance": 0.1, "outside": 0.02, "datums": ["A"]}]})";
+  refused(R"({"datums": {"A": {"faces": [0]}}, "alignment": ["Z"], "characteristics": []})", "alignment: datum Z is not defined");
+  refused(R"({"datums": {"A": {"faces": [0]}}, "alignment": [], "characteristics": []})", "alignment: no datums");
+  std::ofstream(path) << R"({"datums": {"A": {"faces": [0], "fit": "tangent"}}, "alignment": ["A"], "characteristics": [{"name": "P", "faces": [0], "tolerance": 0.1, "outside": 0.02, "datums": ["A"]}]})";
   const Specification s = read_specification(path, model);
   ASSERT_EQ(s.characteristics.size(), 1u);
   EXPECT_EQ(s.characteristics[0].name, "P");
@@ -132,6 +133,7 @@ TEST(Characteristics, ABadSpecificationIsRefusedNamingTheFileAndTheCause) {
   EXPECT_EQ(s.datums[0].name, "A");
   EXPECT_EQ(s.datums[0].faces, std::vector<int>{0});
   EXPECT_EQ(s.datums[0].fit, DatumFit::Tangent);
+  EXPECT_EQ(s.alignment, std::vector<std::string>{"A"});
   std::filesystem::remove(path);
 }
 

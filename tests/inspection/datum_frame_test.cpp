@@ -150,6 +150,19 @@ TEST(DatumFrame, DatumsAreTakenInTheirOrder) {
   EXPECT_EQ(frame.datums.at(1).fixes, 2);
   EXPECT_EQ(frame.datums.at(2).fixes, 1);
   EXPECT_EQ(frame.fixed(), 6);
+  // The whole output aligned to A|C|B: every right-end row's deviation is the turned end's, d(y).
+  const DatumFrame acb_frame = establish_frame({{"A", {block().bottom}}, {"C", {block().left}}, {"B", {block().front}}},
+                                         block().model, r);
+  ASSERT_TRUE(acb_frame.ok()) << acb_frame.reason;
+  const compensation::CompensationResult out = aligned(r, acb_frame, block().model);
+  int rows = 0;
+  for (const compensation::CompensatedPoint& p : out.points) {
+    if (p.face != block().right) continue;
+    const Point3 on_part = actual_pose().inverse() * p.contact;
+    EXPECT_NEAR(p.deviation, d(on_part.y()), 1e-7);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 28);
 }
 
 // The least and largest deviation of points turned by the θ that minimises Σ d(p, θ)² (golden-section search; the

@@ -32,11 +32,12 @@ struct Specification {
   // refers to one is not evaluated, with that reason.
   std::map<std::string, std::string> unusable_datums;
   std::vector<CharacteristicSpec> characteristics;
+  std::vector<std::string> alignment;  // the datum frame the whole output is put in, primary first; empty: none
 };
 
 // The specification file (JSON, DESIGN.md §7). Throws InputError naming the file and what is wrong (not JSON, a
 // characteristic or datum without faces, a tolerance that is not positive, an unknown type or fit, a face the model
-// does not have, a datum the file does not define).
+// does not have, a datum the file does not define, in a characteristic or in "alignment").
 [[nodiscard]] Specification read_specification(const std::filesystem::path& path, const cad::Model& model);
 
 // The characteristics a STEP AP242 file's PMI states (cad/pmi.hpp): each profile of surface and flatness as a
@@ -69,6 +70,8 @@ struct FrameDatum {
 struct Inspection {
   std::vector<FrameDatum> datums;  // of every frame set up, in the order of first use
   std::vector<CharacteristicResult> characteristics;
+  std::string alignment;                    // the specification's alignment frame ("A|B|C"); empty: none
+  std::optional<DatumFrame> alignment_frame;  // set up when there is one (NotDone: why, in its reason)
 };
 
 // Each characteristic on `result`'s trusted (ok) points of its faces, in its datum reference frame; motions the

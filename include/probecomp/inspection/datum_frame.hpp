@@ -65,4 +65,10 @@ struct DatumFrame {
 [[nodiscard]] DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Model& nominal,
                                          const compensation::CompensationResult& result);
 
+// `result` put in `frame`: its transform the frame's, and each computed point's deviation its signed distance (+ outside
+// the material) from the nominal model so placed (the nearest face's, inside its trim), and its statistics of them.
+// The output's `alignment`.
+[[nodiscard]] compensation::CompensationResult aligned(const compensation::CompensationResult& result,
+                                                       const DatumFrame& frame, const cad::Model& nominal);
+
 }  // namespace probecomp::inspection
