@@ -20,6 +20,7 @@ namespace {
 // points start within micrometres of their faces (the registration put them there), so a few steps suffice.
 constexpr double kMotionTolerance = 1e-10;
 constexpr int kMaxIterations = 50;
+constexpr int kMaxHalvings = 30;
 
 // The rows of H's eigen-decomposition the points fix: eigenvalues above registration::kUnconstrainedRatio of the
 // largest, as the registration judges the whole part's motions.
@@ -103,14 +104,43 @@ RestrictedFit fit_in_motions(const cad::ModelLocator& faces, std::span<const Poi
     fit.iterations = iteration;
     if (n == 0 || iteration == kMaxIterations) return fit;
     const Eigen::VectorXd g = fit.fixed.transpose() * (fit.A.transpose() * d);
-    const geometry::Twist delta = -basis * (fit.fixed * (g.array() / fit.lambda.array()).matrix());
-    const geometry::RigidTransform step = registration::motion_about(delta, centre, length);
+    geometry::Twist delta = -basis * (fit.fixed * (g.array() / fit.lambda.array()).matrix());
+    // Damped: a step that does not lower the points' mean squared distance (sizes taken out) is halved, as far as
+    // it takes. A direction the points fix only weakly, with the start far off (a face moved by a millimetre), can
+    // otherwise throw them off their faces and the iteration with them.
+    const auto mean_square = [&](const std::vector<cad::ModelPoint>& feet) {
+      double sum = 0.0, mean = 0.0;
+      int count = 0;
+      for (const cad::ModelPoint& f : feet) {
+        if (!f.ok() || f.on_trim_edge) continue;
+        sum += f.distance * f.distance;
+        mean += f.distance;
+        ++count;
+      }
+      if (count == 0) return std::numeric_limits<double>::infinity();
+      mean /= count;
+      return sum / count - (size_free ? mean * mean : 0.0);
+    };
+    const double before = mean_square(fit.feet);
+    std::vector<Point3> trial(moved.size());
+    geometry::RigidTransform step;
+    for (int halving = 0;; ++halving) {
+      step = registration::motion_about(delta, centre, length);
+      for (std::size_t i = 0; i < moved.size(); ++i) trial[i] = step * moved[i];
+      if (mean_square(faces.closest_points(trial)) < before) break;
+      if (halving == kMaxHalvings) {
+        // No step along the Gauss–Newton direction lowers the mean square: the points are at its minimum as far as
+        // they can tell (the direction comes from a nearly unfixed motion), and stay where they are.
+        fit.converged = true;
+        return fit;
+      }
+      delta *= 0.5;
+    }
     fit.motion = step * fit.motion;
     double largest = 0.0;
-    for (Point3& x : moved) {
-      const Point3 y = step * x;
-      largest = std::max(largest, (y - x).norm());
-      x = y;
+    for (std::size_t i = 0; i < moved.size(); ++i) {
+      largest = std::max(largest, (trial[i] - moved[i]).norm());
+      moved[i] = trial[i];
     }
     if (largest <= kMotionTolerance) {
       // The last step moved the points by less than the tolerance: the feet, J and d above stand for the end.
