@@ -81,6 +81,21 @@ class CompensationResult:
         """The command line's --report page for this run, as a str (self-contained HTML)."""
         return self._run.report_html(model, self._tolerance)
 
+    def judge(self, model, characteristics):
+        """The drawing's characteristics judged on this run's trusted points: `compensate --characteristics`.
+
+        model            the CadModel the run was compensated against
+        characteristics  path of a specification file (JSON: datums, characteristics, alignment; docs/cli.md), or
+                         "pmi" for the surface profiles and flatnesses the model's STEP AP242 file states
+
+        Returns a dict with the --json keys "characteristics" (name, type, faces, datums, tolerance, outside, points,
+        decision, and min, max, value, u or reason; mm) and, where frames were set up, "datums" and "alignment".
+        The arrays of this result are not moved into an alignment frame; the command line's output is.
+        Raises InputError for a bad specification file, CadError for a file whose PMI cannot be read.
+        """
+        stats = _json.loads(self._run.judge_json(model, str(characteristics)))
+        return {k: stats[k] for k in ("characteristics", "datums", "alignment") if k in stats}
+
 
 class FitResult(CompensationResult):
     """A CompensationResult with the fitted part surfaces: `surfaces`, one Surface per fitted face (machine frame,

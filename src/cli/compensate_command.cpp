@@ -179,6 +179,7 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
   const results::FileTimings timings{.read = l.seconds, .write = clock.seconds(), .total = l.run.seconds()};
   if (!a.report.empty()) {
     results::ReportContext context{.inputs = l.inputs, .tolerance = tolerance, .timings = timings};
+    context.inspection = &inspection;
     context.nominal = results::registered_outline(l.model, r.registration.transform);
     if (l.table.normals) {
       const geometry::TipRadii radii = l.radii.empty() ? geometry::TipRadii(l.inputs.tip_radii.front()) : geometry::TipRadii(l.radii);

@@ -15,10 +15,12 @@
 #include <vector>
 
 #include "probecomp/cad/model.hpp"
+#include "probecomp/cad/pmi.hpp"
 #include "probecomp/compensation/conventional.hpp"
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/error.hpp"
 #include "probecomp/geometry/stopwatch.hpp"
+#include "probecomp/inspection/characteristics.hpp"
 #include "probecomp/io/output_files.hpp"
 #include "probecomp/io/point_files.hpp"
 #include "probecomp/io/point_table.hpp"
@@ -330,6 +332,20 @@ PYBIND11_MODULE(_probecomp, m) {
              return results::statistics_json(r.result, r.inputs, {.total = r.seconds}, t);
            },
            py::arg("tolerance") = std::nullopt)
+      .def("judge_json",
+           [](const Run& r, const cad::Model& model, const std::string& characteristics) {
+             // As compensate --characteristics: a specification file, or "pmi" for the model's STEP file's own.
+             inspection::Specification spec;
+             if (characteristics == "pmi") {
+               int skipped = 0;
+               spec = inspection::from_pmi(cad::read_pmi(model.path, model), skipped);
+             } else {
+               spec = inspection::read_specification(characteristics, model);
+             }
+             const inspection::Inspection judged = inspection::evaluate(spec, model, r.result);
+             return results::statistics_json(r.result, r.inputs, {.total = r.seconds}, std::nullopt, &judged);
+           },
+           py::arg("model"), py::arg("characteristics"))
       .def("report_html",
            [](const Run& r, const cad::Model& model, std::optional<std::pair<double, double>> tolerance) {
              results::ReportContext c{.inputs = r.inputs, .tolerance = std::nullopt, .timings = {.total = r.seconds}};

@@ -197,6 +197,56 @@ std::string view_json(const compensation::CompensationResult& r, const ReportCon
   return json_text(view, -1);
 }
 
+std::string joined(const std::vector<int>& v) {
+  std::string out;
+  for (int x : v) out += (out.empty() ? "" : ", ") + std::to_string(x);
+  return out;
+}
+
+// The drawing's characteristics and the datums their frames fitted (DESIGN.md section 7): the tables of --json's
+// "characteristics" and "datums".
+void characteristics_section(std::ostream& h, const inspection::Inspection& in) {
+  h << "<h2>Characteristics</h2>\n<p class=\"note\">Each judged on the trusted points of its faces in its datum "
+       "reference frame (the motions its datums leave free best-fitted to its own points); the decision per ISO "
+       "14253-1 with U = 2u, u including the datums' share."
+    << (in.alignment.empty() ? std::string() : " The deviations of this report are in datum frame " + xml_escape(in.alignment) + ".")
+    << "</p>\n<table id=\"characteristics\"><tr><th class=\"l\">name</th><th class=\"l\">type</th><th>faces</th>"
+       "<th>datums</th><th>tolerance (mm)</th><th>outside (mm)</th><th>points</th><th>min (mm)</th><th>max (mm)</th>"
+       "<th>value (mm)</th><th>U (mm)</th><th class=\"l\">decision</th></tr>\n";
+  for (const inspection::CharacteristicResult& c : in.characteristics) {
+    std::string frame;
+    for (const std::string& d : c.spec.datums) frame += (frame.empty() ? "" : "|") + d;
+    const bool evaluated = c.decision != inspection::Decision::NotEvaluated;
+    const char* mark = c.decision == inspection::Decision::DoesNotConform ? " class=\"l fail\""
+                       : c.decision == inspection::Decision::Conforms     ? " class=\"l\""
+                                                                          : " class=\"l warn\"";
+    h << "<tr><td class=\"l\">" << xml_escape(c.spec.name) << "</td><td class=\"l\">" << xml_escape(c.spec.type)
+      << "</td><td>" << joined(c.spec.faces) << "</td><td>" << xml_escape(frame) << "</td><td>" << mm4(c.spec.tolerance)
+      << "</td><td>" << mm4(c.outside) << "</td><td>" << c.points << "</td>";
+    if (evaluated) {
+      h << "<td>" << mm4(c.min) << "</td><td>" << mm4(c.max) << "</td><td>" << mm4(c.value) << "</td><td>" << mm4(c.u)
+        << "</td>";
+    } else {
+      h << "<td></td><td></td><td></td><td></td>";
+    }
+    h << "<td" << mark << ">" << inspection::to_string(c.decision)
+      << (evaluated ? std::string() : ": " + xml_escape(c.reason)) << "</td></tr>\n";
+  }
+  h << "</table>\n";
+  if (in.datums.empty()) return;
+  h << "<table id=\"datums\"><caption>Datums as their frames fitted them</caption><tr><th class=\"l\">datum</th>"
+       "<th>frame</th><th class=\"l\">fit</th><th>faces</th><th>points</th><th>motions fixed</th><th>RMS (mm)</th>"
+       "<th>size change (mm)</th></tr>\n";
+  for (const inspection::FrameDatum& f : in.datums) {
+    const inspection::DatumResult& d = f.datum;
+    h << "<tr><td class=\"l\">" << xml_escape(d.name) << "</td><td>" << xml_escape(f.frame) << "</td><td class=\"l\">"
+      << inspection::to_string(d.fit) << "</td><td>" << joined(d.faces) << "</td><td>" << d.points << "</td><td>"
+      << d.fixes << "</td><td>" << mm6(d.rms) << "</td><td>" << (d.size_change ? mm6(*d.size_change) : std::string())
+      << "</td></tr>\n";
+  }
+  h << "</table>\n";
+}
+
 }  // namespace
 
 std::vector<cad::Polyline> registered_outline(const cad::Model& model, const geometry::RigidTransform& cad_to_machine,
@@ -269,6 +319,7 @@ std::string html_report(const compensation::CompensationResult& r, const ReportC
   h << "<th>total</th></tr><tr>";
   for (PointStatus s : compensation::kPointStatuses) h << "<td>" << r.count(s) << "</td>";
   h << "<td>" << r.statistics.total << "</td></tr></table>\n";
+  if (c.inspection != nullptr && !c.inspection->characteristics.empty()) characteristics_section(h, *c.inspection);
   // The 3-D view.
   std::string caption;
   const std::string view = view_json(r, c, caption);

@@ -106,7 +106,8 @@ check "grep -q 'probecomp: P4: conforms (value' '$W/spec.err'" "--characteristic
 # alignment: the whole output in datum A's frame (the panel's least-squares fit): its deviations are that frame's.
 sed 's/"characteristics"/"alignment": ["A"], "characteristics"/' "$W/spec.json" >"$W/aligned.json"
 "$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 --characteristics "$W/aligned.json" \
-  --output "$W/aligned.csv" --json "$W/aligned_stats.json" --quiet 2>/dev/null || { echo "FAIL: alignment"; fail=1; }
+  --output "$W/aligned.csv" --json "$W/aligned_stats.json" --report "$W/aligned.html" --quiet 2>/dev/null || { echo "FAIL: alignment"; fail=1; }
+check "grep -q 'id=\"characteristics\"' '$W/aligned.html' && grep -q 'in datum frame A.' '$W/aligned.html'" "alignment: the report's characteristics table, and its frame"
 json_check "$W/aligned_stats.json" "j['alignment'] == {'frame': 'A', 'fixed': 6} and abs(j['deviation']['max'] - j['characteristics'][2]['max']) < 1e-6 and abs(j['deviation']['min'] - j['characteristics'][2]['min']) < 1e-6" \
   "alignment: the deviation column in datum A's frame, its extremes those of the profile in that frame" || fail=1
 expect_error "no semantic PMI" "$W/pmi.csv" "$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 --characteristics pmi --output "$W/pmi.csv"

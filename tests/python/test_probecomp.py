@@ -115,6 +115,21 @@ def test_the_demo_gives_the_clis_numbers(demo, work):
     assert [f["face"] for f in res.stats["faces"]] == [f["face"] for f in theirs["faces"]]
     html = res.report_html(model)  # the command line's --report page
     assert '<canvas id="view"' in html and "<td>7200</td>" in html
+    # The drawing's characteristics: the same as compensate --characteristics gives in --json.
+    spec = work / "spec.json"
+    spec.write_text('{"datums": {"A": {"faces": [0], "fit": "tangent"}}, "characteristics": ['
+                    '{"name": "F", "faces": [0], "tolerance": 3.0}, {"name": "P", "faces": [0], "tolerance": 3.0, '
+                    '"datums": ["A"]}]}')
+    judged_cli = work / "judged.json"
+    cli("compensate", "--cad", demo / "nominal.igs", "--points", demo / "raw.csv", "--probe-radius", 1,
+        "--characteristics", spec, "--output", work / "judged.csv", "--json", judged_cli, "--quiet")
+    judged = res.judge(model, spec)
+    theirs = json.load(open(judged_cli))
+    assert judged["characteristics"] == theirs["characteristics"]
+    assert judged["datums"] == theirs["datums"] and judged["datums"][0]["fit"] == "tangent"
+    with pytest.raises(probecomp.InputError, match="spec_bad.json"):
+        (work / "spec_bad.json").write_text("{")
+        res.judge(model, work / "spec_bad.json")
 
 
 def test_a_held_out_free_form_case_gives_the_clis_numbers_and_meets_the_truth(heldout, demo, work, capsys):

@@ -146,6 +146,41 @@ TEST(HtmlReport, NamesAreEscaped) {
   EXPECT_NE(html.find("a&lt;b&gt;&amp;&quot;c&quot;.csv"), std::string::npos);
 }
 
+TEST(HtmlReport, CharacteristicsAndDatumsHaveTheirTablesWithTheDecisions) {
+  CompensationResult r;
+  inspection::Inspection judged;
+  inspection::CharacteristicResult p1;
+  p1.spec = {.name = "P<1>", .faces = {3, 4}, .tolerance = 0.5, .outside = {}, .datums = {"A", "B"}};
+  p1.outside = 0.25;
+  p1.points = 40;
+  p1.min = -0.1234;
+  p1.max = 0.3456;
+  p1.value = 0.6912;
+  p1.u = 0.004;
+  p1.decision = inspection::Decision::DoesNotConform;
+  inspection::CharacteristicResult p2;
+  p2.spec = {.name = "F", .faces = {7}, .tolerance = 0.05, .outside = {}, .datums = {}};
+  p2.reason = "3 trusted points on its faces (7 needed for the motions its datums leave free)";
+  judged.characteristics = {p1, p2};
+  inspection::DatumResult a{.name = "A", .faces = {1}, .fit = inspection::DatumFit::Tangent, .points = 12, .fixes = 3,
+                            .rms = 0.002, .size_change = {}};
+  judged.datums = {{"A|B", a}};
+  judged.alignment = "A|B";
+  ReportContext c;
+  c.inspection = &judged;
+  const std::string html = html_report(r, c);
+  EXPECT_NE(html.find("<td class=\"l\">P&lt;1&gt;</td><td class=\"l\">surface-profile</td><td>3, 4</td><td>A|B</td>"
+                      "<td>0.5000</td><td>0.2500</td><td>40</td><td>-0.1234</td><td>0.3456</td><td>0.6912</td>"
+                      "<td>0.0040</td><td class=\"l fail\">does-not-conform</td>"),
+            std::string::npos);
+  EXPECT_NE(html.find("<td class=\"l warn\">not-evaluated: 3 trusted points on its faces"), std::string::npos);
+  EXPECT_NE(html.find("<td class=\"l\">A</td><td>A|B</td><td class=\"l\">tangent</td><td>1</td><td>12</td><td>3</td>"),
+            std::string::npos);
+  EXPECT_NE(html.find("in datum frame A|B."), std::string::npos);
+  // Without characteristics, no such section.
+  EXPECT_EQ(html_report(r, ReportContext{}).find("id=\"characteristics\""), std::string::npos);
+}
+
 TEST(RegisteredOutline, IsTheModelsOutlineMovedByTheRegistrationWithinItsBudget) {
   const cad::Model model = cad::Model::load(std::filesystem::path(PROBECOMP_TEST_CAD_DIR) / "asitus_repatch-hpdc.stp");
   geometry::RigidTransform T = geometry::RigidTransform::Identity();

@@ -31,6 +31,8 @@ struct ReportContext {
   // The 3-D view shows at most this many points (every k-th row, the labelled ones always): 100 000 points make a
   // report of about 5 MB. The tables and histograms always use every point.
   std::size_t max_view_points = 120000;
+  // The drawing's characteristics and datums, when the run judged them: a table of each after the counts.
+  const inspection::Inspection* inspection = nullptr;
 };
 
 // The model's faces as outlines (cad::face_outline) moved by `cad_to_machine`, at most about `max_points` points in
@@ -41,7 +43,8 @@ struct ReportContext {
 
 // The page: the inputs (files, unit, tip radii, tolerance, version); counts by status; the trusted deviations (mean,
 // std, min, max, out of tolerance) with their histogram and tolerance band; with approach normals, a histogram of
-// the CAD-based minus the conventional contact point along the normal; the 3-D view (colour by deviation, status or
+// the CAD-based minus the conventional contact point along the normal; the characteristics and datums, when judged;
+// the 3-D view (colour by deviation, status or
 // u; the worst points labelled); a table per face (points, ok, mean, std, min, max, out of tolerance, mean u,
 // fitted or why not); the registration (status, RMS, transform, free motions); the warnings; the timings.
 [[nodiscard]] std::string html_report(const compensation::CompensationResult& result, const ReportContext& context);
