@@ -17,6 +17,24 @@ namespace probecomp::inspection {
 
 namespace {
 
+// The coverage factor of a decision over n points: their intervals d ± k·u cover their true deviations all together
+// with 95 % probability (Šidák 1967, normal errors): each with 0.95^(1/n), so k = Φ⁻¹(1 − (1 − 0.95^(1/n))/2), and
+// never below ISO 14253-1's k = 2 (one point: 1.96). With k = 2 on each of many points, a face exactly at its limit
+// would have some point's whole interval past it by chance (20 points: 37 % of the time) and be rejected.
+double coverage_factor(int n) {
+  const double tail = 0.5 * (1.0 - std::pow(0.95, 1.0 / std::max(1, n)));  // one side's probability per point
+  // Φ⁻¹(1 − tail) by Newton on the upper tail Q(x) = erfc(x/√2)/2, from x = 2 (Q is convex for x > 0: monotone).
+  double x = 2.0;
+  for (int i = 0; i < 50; ++i) {
+    const double q = 0.5 * std::erfc(x / std::sqrt(2.0));
+    const double density = std::exp(-0.5 * x * x) / std::sqrt(2.0 * M_PI);
+    const double step = (q - tail) / density;
+    x += step;
+    if (std::abs(step) < 1e-12) break;
+  }
+  return std::max(2.0, x);
+}
+
 [[noreturn]] void bad(const std::filesystem::path& path, const std::string& why) {
   throw InputError(path.string() + ": " + why);
 }
@@ -97,7 +115,7 @@ Specification read_specification(const std::filesystem::path& path, const cad::M
     CharacteristicSpec s;
     const std::string where = "characteristic " + std::to_string(k);
     try {
-      s.name = c.value("name", "C" + std::to_string(k));
+      s.name = c.value("name", std::string("C").append(std::to_string(k)));
       s.type = c.value("type", std::string("surface-profile"));
       if (s.type != "surface-profile") bad(path, where + ": unknown type \"" + s.type + "\" (expected surface-profile)");
       if (!c.contains("faces")) bad(path, where + ": no \"faces\"");
@@ -229,21 +247,23 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
     const double centre = c.outside - 0.5 * s.tolerance;
     c.min = std::numeric_limits<double>::infinity();
     c.max = -std::numeric_limits<double>::infinity();
-    bool inside = true, outside_surely = false;
     // A point whose foot fell on its faces' edge after the fit is past them (its distance is not along a normal):
     // fit_in_motions leaves it out, and it is not counted.
     c.points = static_cast<int>(fit.used.size());
+    c.coverage = coverage_factor(c.points);
+    bool inside = true, outside_surely = false;
     for (Eigen::Index r = 0; r < fit.d.size(); ++r) {
       const double d = fit.d(r);
       const Eigen::Matrix<double, 6, 1> J = fit.J.row(r).transpose();
       const double uk = u[static_cast<std::size_t>(fit.used[static_cast<std::size_t>(r)])];
-      const double U = 2.0 * std::sqrt(uk * uk + J.dot(frame.covariance * J));
+      const double ud = std::sqrt(uk * uk + J.dot(frame.covariance * J));  // the point's own and its datums' share
+      const double U = c.coverage * ud;
       c.min = std::min(c.min, d);
       c.max = std::max(c.max, d);
       const double width = 2.0 * std::abs(d - centre);
       if (width > c.value) {
         c.value = width;
-        c.u = U;
+        c.u = 2.0 * ud;
       }
       inside = inside && d - U >= c.outside - s.tolerance && d + U <= c.outside;
       outside_surely = outside_surely || d - U > c.outside || d + U < c.outside - s.tolerance;

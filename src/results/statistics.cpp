@@ -216,6 +216,7 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
         x["max"] = number(c.max);
         x["value"] = number(c.value);
         x["u"] = number(c.u);
+        x["k"] = json_fixed(c.coverage, 3);
       }
       list.push_back(x);
     }

@@ -77,6 +77,9 @@ TEST(Characteristics, AFlatnessIsTheTwistsHalfHeightAndItsDecisionFollowsTheZone
   EXPECT_NEAR(wide.min, -0.16 * h, 0.001);
   EXPECT_NEAR(wide.max, 0.16 * h, 0.001);
   EXPECT_EQ(wide.decision, Decision::Conforms);
+  // The decision's coverage factor keeps all 63 points' intervals right together with 95 % (Šidák): per point
+  // 1 − 0.95^(1/63), split over two sides: k = 3.348 (normal quantile, as tabulated).
+  EXPECT_NEAR(wide.coverage, 3.348, 0.001);
   // A zone narrower than the form by more than U: does not conform.
   EXPECT_EQ(evaluate(flatness(0.008), m.nominal, m.result).characteristics.at(0).decision, Decision::DoesNotConform);
   // A zone exactly the measured value: its extreme point sits on the limit, its ±U across it.

@@ -1,6 +1,7 @@
 // The drawing's own characteristics on a simulated measurement of a NIST test part (FTC-06, STEP AP242 with semantic
 // GD&T): --characteristics pmi's path. The actual part is the nominal with some toleranced faces moved along their
-// normals by known amounts, placed 0.4 mm and 0.6° off; 10–40 touches a face (r = 1 mm, σ = 2 µm). Faces that are
+// normals by known amounts, placed 5.4 mm and 5° off (the part program following it, as after an operator's manual
+// alignment; no initial transform given); 10–40 touches a face (r = 1 mm, σ = 2 µm). Faces that are
 // datum features are not moved, so each datum frame is the true placement and a moved face's deviations are its
 // move: inside its zone, outside it, and exactly at its limit (indeterminate).
 
@@ -107,16 +108,21 @@ int judge_as_moved(const std::filesystem::path& file) {
     actual.faces[static_cast<std::size_t>(f)] = offset.model.faces.front();
   }
   const geometry::RigidTransform placement =
-      Eigen::Translation3d(0.3, -0.2, 0.15) * Eigen::AngleAxisd(0.6 * M_PI / 180, Vector3(1, -2, 2).normalized());
+      Eigen::Translation3d(4.0, -3.0, 2.0) * Eigen::AngleAxisd(5.0 * M_PI / 180, Vector3(1, -2, 2).normalized());
   const cad::Model placed = simulation::actual_model(actual, {}, placement);
+  std::vector<simulation::ProgrammedPoint> followed = plan;
+  for (simulation::ProgrammedPoint& p : followed) {
+    p.point = placement * p.point;
+    p.normal = placement.linear() * p.normal;
+  }
   const std::vector<simulation::Touch> touches =
-      simulation::simulate_touches(cad::ModelLocator(placed), plan, {.probe_radius = 1.0, .noise_sigma = 0.002, .seed = 7});
+      simulation::simulate_touches(cad::ModelLocator(placed), followed, {.probe_radius = 1.0, .noise_sigma = 0.002, .seed = 7});
   std::vector<Point3> centres;
   std::vector<Vector3> normals;
   for (std::size_t i = 0; i < touches.size(); ++i) {
     if (touches[i].status == simulation::Touch::Status::Missed) continue;
     centres.push_back(touches[i].measured);
-    normals.push_back(plan[i].normal);
+    normals.push_back(followed[i].normal);
   }
   compensation::CompensateOptions options;
   options.probe_radius = 1.0;
@@ -130,8 +136,8 @@ int judge_as_moved(const std::filesystem::path& file) {
     const double t = known.value_or(NAN);
     std::string frame;
     for (const std::string& d : c.spec.datums) frame += (frame.empty() ? "" : "|") + d;
-    std::printf("  %-12s %-6s t %.4f  move %+.4f  min %+.4f max %+.4f  U %.4f  %s %s\n", c.spec.name.c_str(),
-                frame.c_str(), c.spec.tolerance, t, c.min, c.max, c.u, to_string(c.decision), c.reason.c_str());
+    std::printf("  %-12s %-6s t %.4f  move %+.4f  min %+.4f max %+.4f  2u %.4f k %.2f  %s %s\n", c.spec.name.c_str(),
+                frame.c_str(), c.spec.tolerance, t, c.min, c.max, c.u, c.coverage, to_string(c.decision), c.reason.c_str());
     if (c.decision == Decision::NotEvaluated) {
       EXPECT_NE(c.reason.find("could not be read from the file"), std::string::npos) << c.spec.name << ": " << c.reason;
       continue;

@@ -1,8 +1,8 @@
 #pragma once
 // A drawing's characteristics judged on the compensated points (DESIGN.md §7): surface profiles, flatness being one
-// without datums, with their value and the decision under ISO 14253-1 (U = 2u). Each is judged in its datum
-// reference frame (datum_frame.hpp); motions its datums leave free, all six without datums, are best-fitted to its
-// own points (least squares) first.
+// without datums, with their value and the decision under ISO 14253-1 (U = k·u, k at least 2: see `coverage`).
+// Each is judged in its datum reference frame (datum_frame.hpp); motions its datums leave free, all six without
+// datums, are best-fitted to its own points (least squares) first.
 
 #include <filesystem>
 #include <map>
@@ -57,6 +57,9 @@ struct CharacteristicResult {
   double min = 0.0, max = 0.0;  // signed deviations in the characteristic's frame, mm
   double value = 0.0;    // 2·max|d − (outside − t/2)|: the width of the smallest such zone holding every point, mm
   double u = 0.0;        // of value: 2u of the point that sets it (its own and its datums' share), mm
+  // The decision's coverage factor: every point's d ± k·u (u its own and its datums' share) is judged against the zone,
+  // k keeping all the points' intervals right together with 95 % probability (2 for a few points; 3.0 for 20).
+  double coverage = 2.0;
   Decision decision = Decision::NotEvaluated;
   std::string reason;    // why not evaluated
 };
