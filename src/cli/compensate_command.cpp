@@ -163,7 +163,7 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
   // CSV, the usual output of a scan, goes to its file block by block; DMIS and QIF are built whole.
   const io::PointFormat format = io::point_format(a.output);
   const bool qif = format == io::PointFormat::Qif, dmis = !a.output.empty() && format == io::PointFormat::Dmis;
-  const std::string text = qif ? results::compensated_qif(l.table, r, a.points)
+  const std::string text = qif ? results::compensated_qif(l.table, r, a.points, &inspection)
                            : dmis ? results::compensated_dmis(l.table, r, a.points)
                                   : std::string();
   std::optional<results::Tolerance> tolerance;

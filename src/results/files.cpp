@@ -10,6 +10,7 @@
 #include "probecomp/io/dmis.hpp"
 #include "probecomp/io/format.hpp"
 #include "probecomp/io/qif.hpp"
+#include "qif_characteristics.hpp"
 #include "probecomp/io/text.hpp"
 
 namespace probecomp::results {
@@ -113,7 +114,8 @@ std::string compensated_dmis(const PointTable& t, const compensation::Compensati
   return out.str();
 }
 
-std::string compensated_qif(const PointTable& t, const compensation::CompensationResult& r, const std::string& source) {
+std::string compensated_qif(const PointTable& t, const compensation::CompensationResult& r, const std::string& source,
+                            const inspection::Inspection* inspection) {
   std::vector<io::QifContactPoint> points;
   points.reserve(r.points.size());
   for (const compensation::CompensatedPoint& p : r.points) {
@@ -121,7 +123,9 @@ std::string compensated_qif(const PointTable& t, const compensation::Compensatio
                       .uncertainty = p.uncertainty, .radius = p.radius, .face = p.face,
                       .status = compensation::to_string(p.status)});
   }
-  return io::contact_points_qif(t, points, compensation::to_string(r.method), source);
+  std::string xml = io::contact_points_qif(t, points, compensation::to_string(r.method), source);
+  if (inspection != nullptr) add_characteristics(xml, *inspection, 1.0 / t.unit.mm);
+  return xml;
 }
 
 }  // namespace probecomp::results

@@ -107,6 +107,19 @@ check "grep -q 'name=\"probecomp:status\" value=\"ok ok ' '$W/out.qif' && grep -
 "$P" compensate --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --output "$W/out_csv.csv" --quiet || fail=1
 check "[ \"\$(cut -d, -f1-10 '$W/out_qif.csv')\" = \"\$(cat '$W/out_csv.csv')\" ]" "compensated from QIF: the CSV run's figures, row for row"
 json_check "$W/out.json" "j['inputs']['tip_radii'] == [1]" "compensated from QIF: the radius from ProbeRadius"
+# With characteristics: their definitions, nominals, items and measurements (status, value and its u, max, min) are
+# in the document, which still validates; their figures are --json's, in the document's unit (mm here).
+printf '{"datums": {"A": {"faces": [0]}}, "characteristics": [{"name": "P1", "faces": [0], "tolerance": 3.0},
+  {"name": "P2", "faces": [0], "tolerance": 0.001, "datums": ["A"]}, {"name": "P3", "faces": [0], "tolerance": 0.2, "datums": ["B"]}]}' \
+  | sed 's/"B"/"A"/; s/"P3", "faces": \[0\]/"P3", "faces": [0], "outside": 0.05/' >"$W/spec.json"
+"$P" compensate --cad "$W/demo/nominal.igs" --points "$W/raw.qif" --characteristics "$W/spec.json" --output "$W/judged.qif" \
+  --json "$W/judged.json" --quiet 2>/dev/null || { echo "FAIL: compensate with characteristics to QIF"; fail=1; }
+validates "$W/judged.qif" || fail=1
+check "[ \$(grep -c '<SurfaceProfileCharacteristicMeasurement id=' '$W/judged.qif') -eq 3 ]" "judged.qif: three characteristic measurements"
+check "grep -q '<CharacteristicStatusEnum>PASS</CharacteristicStatusEnum>' '$W/judged.qif' && grep -q '<CharacteristicStatusEnum>FAIL</CharacteristicStatusEnum>' '$W/judged.qif'" \
+  "judged.qif: PASS and FAIL as --json's decisions"
+json_check "$W/judged.json" "'>%.7f' % j['characteristics'][0]['value'] in open('$W/judged.qif').read() and '<OuterDisposition>0.050000000</OuterDisposition>' in open('$W/judged.qif').read()" \
+  "judged.qif: the value and the outer disposition as --json's" || fail=1
 
 # Bad inputs: one line naming the file and the line, a non-zero exit, no output.
 printf 'x,y,z\n1,2,3\n' >"$W/notxml.qif"

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/inspection/characteristics.hpp"
 #include "probecomp/io/point_table.hpp"
 
 namespace probecomp::results {
@@ -29,7 +30,13 @@ void write_compensated_csv(std::ostream& out, const io::PointTable& input, const
 
 // The results as a QIF 3.0 document (io::contact_points_qif, with each point's status, u and face): one
 // MeasuredPointSet per set of the input, with the same id, count and order.
+// With an inspection, its characteristics too (DESIGN.md §7): a surface profile characteristic's definition (its
+// tolerance and outer disposition), nominal and item under Characteristics, against the standard ISO 1101 added to
+// StandardsDefinitions, and its measurement (status PASS, FAIL, INDETERMINATE or NOT_ANALYZED; value with its
+// combined standard uncertainty, max and min) under MeasuredCharacteristics; what QIF has no element for (datums,
+// points, k, why not evaluated) as probecomp:... attributes. (The document is new: an input QIF's own
+// characteristics, like its other sections, are not carried.)
 [[nodiscard]] std::string compensated_qif(const io::PointTable& input, const compensation::CompensationResult& result,
-                                          const std::string& source);
+                                          const std::string& source, const inspection::Inspection* inspection = nullptr);
 
 }  // namespace probecomp::results
