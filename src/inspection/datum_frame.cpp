@@ -281,7 +281,15 @@ compensation::CompensationResult aligned(const compensation::CompensationResult&
   }
   const std::vector<cad::ModelPoint> feet = cad::ModelLocator(nominal).closest_points(points);
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    out.points[rows[i]].deviation = feet[i].ok() ? feet[i].distance : std::numeric_limits<double>::quiet_NaN();
+    compensation::CompensatedPoint& p = out.points[rows[i]];
+    p.deviation = feet[i].ok() ? feet[i].distance : std::numeric_limits<double>::quiet_NaN();
+    // The frame's own uncertainty moves the nominal under the point: its share at the point, along the normal.
+    if (feet[i].ok() && std::isfinite(p.uncertainty)) {
+      Eigen::Matrix<double, 6, 1> J;
+      J.head<3>() = (points[i] - frame.centre).cross(feet[i].normal) / frame.length;
+      J.tail<3>() = feet[i].normal;
+      p.uncertainty = std::sqrt(p.uncertainty * p.uncertainty + J.dot(frame.covariance * J));
+    }
   }
   out.statistics = compensation::statistics(out.points);
   return out;

@@ -162,15 +162,17 @@ int judge_as_moved(const std::filesystem::path& file, double aligned_bound = 0.0
       }
     }
     const compensation::CompensationResult out = aligned(result, establish_frame(order, nominal, result), nominal);
-    double worst = 0.0;
+    double worst = 0.0, worst_in_u = 0.0;
     int rows = 0;
     for (const compensation::CompensatedPoint& p : out.points) {
       if (p.status != compensation::PointStatus::Ok) continue;
       const double move = moved.contains(p.face) ? moved.at(p.face) : 0.0;
       worst = std::max(worst, std::abs(p.deviation - move));
+      worst_in_u = std::max(worst_in_u, std::abs(p.deviation - move) / p.uncertainty);
       ++rows;
     }
-    std::printf("aligned to %s: %d trusted rows, largest |deviation - move| %.4f mm\n", c.name.c_str(), rows, worst);
+    std::printf("aligned to %s (%s): %d trusted rows, largest |deviation - move| %.4f mm, %.2f u\n", c.name.c_str(),
+                c.datums.empty() ? "" : c.datums.front().c_str(), rows, worst, worst_in_u);
     EXPECT_LT(worst, aligned_bound);
     break;
   }
@@ -183,8 +185,9 @@ TEST(NistCharacteristics, StcSixsProfilesAreJudgedInTheirDatumFramesAsTheirMoves
 
 TEST(NistCharacteristics, CtcFoursProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay) {
   if (test::kLight) GTEST_SKIP() << "the sanitizer build runs STC-06's, through the same code";
-  // Not the 10 µm yet: the rows on datum B, a hole split into two half-cylinder faces of about 20 touches each,
-  // are up to 11.3 µm off with u 2.1 µm (sparse element faces: the next step).
+  // Not the 10 µm yet: aligned to D|G|H (G and H holes, their sparse touches fitted as cylinders), the rows on
+  // the far hole B are up to 11.3 µm off, 4.4 times their u with the frame's share: the frame turns the part more than
+  // its datums' u says (the next step). In A|B|C, B's own fit leaves 1.7 µm rms.
   EXPECT_GT(judge_as_moved(test::kCadDir / "nist_ctc_04_asme1_ap242-e1.stp", 0.012), 0);
 }
 
