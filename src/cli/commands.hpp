@@ -22,6 +22,7 @@ struct CompensateArgs {
   std::string cad, points, output, json, report, method = "cad";
   std::string tolerance;       // "LOWER,UPPER", mm (io::parse_tolerance); empty: none
   std::string characteristics;  // SPEC.json (inspection::read_specification), or "pmi": the STEP file's; empty: none
+  std::string replan;           // PLAN.dmi: the points to measure again (with characteristics); empty: none
   std::string units;           // of the point file (mm or inch); empty: mm, or what a DMIS file says
   std::string initial_transform;  // T.txt: 4 × 4, CAD → machine (io/transform_file.hpp); empty: identity
   // In the points' unit: every row's, or the default for rows without their own (a column r, DMIS sensors, QIF).

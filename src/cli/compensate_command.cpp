@@ -6,11 +6,14 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
+#include "cli/measurement_program.hpp"
+#include "probecomp/cad/plan.hpp"
 #include "probecomp/cad/model.hpp"
 #include "probecomp/cad/pmi.hpp"
 #include "probecomp/inspection/characteristics.hpp"
@@ -154,6 +157,48 @@ compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Met
   return result;
 }
 
+// The points to measure again (--replan), machine frame: each point of an indeterminate characteristic whose d ± U
+// crosses a limit, at its contact along its fitted normal; and over the faces of one judged on too few trusted
+// points, a plan of 10 to 40 points a face (a spacing halved from 8 mm until the face holds 10) at the registered
+// nominal.
+std::string replan_program(const CompensateArgs& a, const Loaded& l, const compensation::CompensationResult& r,
+                           const inspection::Inspection& inspection) {
+  std::vector<cli::ProgrammedTouch> touches;
+  std::set<std::size_t> rows;
+  std::set<int> faces;
+  std::vector<std::string> comments;
+  for (const inspection::CharacteristicResult& c : inspection.characteristics) {
+    if (c.decision == inspection::Decision::Indeterminate) {
+      rows.insert(c.undecided.begin(), c.undecided.end());
+      // DMIS is ASCII: "+-", not the plus-minus sign.
+      comments.push_back(c.spec.name + ": indeterminate: measure again the points whose d +- U cross a limit (" +
+                         std::to_string(c.undecided.size()) + ")");
+    } else if (c.too_few_points) {
+      faces.insert(c.spec.faces.begin(), c.spec.faces.end());
+      comments.push_back(c.spec.name + ": " + c.reason + "; its faces planned");
+    }
+  }
+  for (std::size_t k : rows) {
+    const compensation::CompensatedPoint& p = r.points[k];
+    touches.push_back({std::string("R").append(std::to_string(k + 1)), p.contact, p.normal});
+  }
+  const geometry::RigidTransform& T = r.registration.transform;
+  for (int f : faces) {
+    std::vector<cad::PlannedPoint> plan;
+    for (double spacing = 8.0; spacing > 0.2; spacing /= 2) {
+      plan = cad::plan_points(l.model, spacing, {f});
+      if (plan.size() >= 10) break;
+    }
+    const std::size_t stride = std::max<std::size_t>(1, (plan.size() + 39) / 40);
+    for (std::size_t k = 0; k < plan.size(); k += stride) {
+      touches.push_back({std::string("F").append(std::to_string(f)).append("_").append(std::to_string(k / stride + 1)), T * plan[k].point,
+                         T.linear() * plan[k].normal});
+    }
+  }
+  if (touches.empty()) comments.push_back("nothing to measure again: every characteristic was decided");
+  return cli::dmis_measurement_program("probecomp re-measurement for " + a.characteristics, touches, comments);
+}
+
 // The write step: the points (CSV, DMIS or QIF, by the extension), the report and the statistics, all or none
 // (standard output last, once every file is in place).
 void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation::CompensationResult& r,
@@ -188,6 +233,7 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
     files.add(a.report, results::html_report(r, context));
   }
   if (!a.json.empty()) files.add(a.json, results::statistics_json(r, l.inputs, timings, tolerance, &inspection));
+  if (!a.replan.empty()) files.add(a.replan, replan_program(a, l, r, inspection));
   files.commit();
   if (a.output.empty()) results::write_compensated_csv(std::cout, l.table, r);
   bar.update("done", 1.0);
@@ -202,7 +248,11 @@ void print_summary_row(std::ostream& out, const char* name, const studies::Error
 }  // namespace
 
 int run_compensate(const CompensateArgs& a) {
-  io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}, {"--report", a.report}},
+  if (!a.replan.empty()) {
+    if (a.characteristics.empty()) throw std::invalid_argument("--replan needs --characteristics: it re-plans where they are undecided");
+    if (!has_extension(a.replan, {".dmi"})) throw std::invalid_argument("--replan must end in .dmi (a DMIS part program)");
+  }
+  io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}, {"--report", a.report}, {"--replan", a.replan}},
                                  {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform},
                                   {"--characteristics", a.characteristics == "pmi" ? std::string() : a.characteristics}});
   if (!a.tolerance.empty()) (void)tolerance_band(a.tolerance);  // a bad band fails before the run

@@ -23,6 +23,7 @@
 #include "probecomp/cad/plan.hpp"
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
+#include "cli/measurement_program.hpp"
 #include "probecomp/io/format.hpp"
 #include "probecomp/io/json.hpp"
 #include "probecomp/io/output_files.hpp"
@@ -225,17 +226,11 @@ int run_plan(const std::string& part, double spacing, const std::string& face_li
   }
   std::ostringstream out;
   if (dmis) {
-    out << "DMISMN/'probecomp measurement plan for " << part << "',05.3\nUNITS/MM,ANGDEC\n";
+    std::vector<cli::ProgrammedTouch> touches;
     for (std::size_t k = 0; k < plan.size(); ++k) {
-      const auto& p = plan[k];
-      const std::string xyz = mm(p.point.x()) + "," + mm(p.point.y()) + "," + mm(p.point.z()) + "," + unit(p.normal.x()) +
-                              "," + unit(p.normal.y()) + "," + unit(p.normal.z());
-      out << "F(P" << k + 1 << ")=FEAT/POINT,CART," << xyz << "\n";
-      out << "MEAS/POINT,F(P" << k + 1 << "),1\n";
-      out << "PTMEAS/CART," << xyz << "\n";
-      out << "ENDMES\n";
+      touches.push_back({std::string("P").append(std::to_string(k + 1)), plan[k].point, plan[k].normal});
     }
-    out << "ENDFIL\n";
+    out << cli::dmis_measurement_program("probecomp measurement plan for " + part, touches);
   } else {
     out << "x,y,z,i,j,k,face\n";
     for (const auto& p : plan) {
@@ -408,6 +403,9 @@ int main(int argc, char** argv) {
   compensate->add_option("--characteristics", comp.characteristics,
                          "Judge the drawing's characteristics: SPEC.json (datums and surface profiles, mm), or pmi for "
                          "the STEP AP242 file's own; decisions with U = 2u (ISO 14253-1) on standard error and in --json");
+  compensate->add_option("--replan", comp.replan,
+                         "PLAN.dmi: with --characteristics, a DMIS program of the points to measure again: where a "
+                         "decision is indeterminate, and over faces with too few trusted points to judge");
   compensate->add_flag("--quiet", comp.quiet, "No progress on standard error");
 
   cli::FitArgs fit_args;

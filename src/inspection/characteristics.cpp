@@ -221,15 +221,19 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
     const geometry::RigidTransform to_cad = frame.transform.inverse();
     std::vector<Point3> points;
     std::vector<double> u;
-    for (const compensation::CompensatedPoint& p : result.points) {
+    std::vector<std::size_t> row;
+    for (std::size_t k = 0; k < result.points.size(); ++k) {
+      const compensation::CompensatedPoint& p = result.points[k];
       if (p.status == compensation::PointStatus::Ok && faces.contains(p.face)) {
         points.push_back(to_cad * p.contact);
         u.push_back(p.uncertainty);
+        row.push_back(k);
       }
     }
     const int needed = std::max(1, static_cast<int>(frame.free_basis.cols()) + 1);
     if (static_cast<int>(points.size()) < needed) {
       c.points = static_cast<int>(points.size());
+      c.too_few_points = true;
       not_evaluated(std::to_string(c.points) + " trusted points on its faces (" + std::to_string(needed) +
                     " needed for the motions its datums leave free)");
       continue;
@@ -267,8 +271,12 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
       }
       inside = inside && d - U >= c.outside - s.tolerance && d + U <= c.outside;
       outside_surely = outside_surely || d - U > c.outside || d + U < c.outside - s.tolerance;
+      const bool straddles = (d - U < c.outside && d + U > c.outside) ||
+                             (d - U < c.outside - s.tolerance && d + U > c.outside - s.tolerance);
+      if (straddles) c.undecided.push_back(row[static_cast<std::size_t>(fit.used[static_cast<std::size_t>(r)])]);
     }
     if (c.points < needed) {
+      c.too_few_points = true;
       not_evaluated("after the best fit only " + std::to_string(c.points) + " of its points lie inside its faces");
       continue;
     }

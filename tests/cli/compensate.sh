@@ -106,6 +106,19 @@ json_check "$W/spec_stats.json" "[(d['name'], d['frame'], d['fit'], d['fixes'], 
 # uncertainty: conforms or indeterminate, as its U says.)
 check "grep -q 'probecomp: P3: conforms (value' '$W/spec.err' && grep -Eq 'probecomp: P4: (conforms|indeterminate) \(value' '$W/spec.err'" \
   "--characteristics: the decisions on standard error"
+# --replan: a zone exactly the profile's value leaves it indeterminate (its extreme points' d ± U cross the limit);
+# the program measures those points again, at their contacts along their normals, and reads back as DMIS.
+python3 -c "import json; v = json.load(open('$W/spec_stats.json'))['characteristics'][0]['value']; print('{\"characteristics\": [{\"name\": \"L\", \"faces\": [0], \"tolerance\": %r}]}' % v)" >"$W/limit.json"
+"$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 --characteristics "$W/limit.json" \
+  --replan "$W/replan.dmi" --output "$W/limit.csv" --quiet 2>"$W/limit.err" || { echo "FAIL: --replan"; fail=1; }
+check "grep -q 'probecomp: L: indeterminate' '$W/limit.err' && [ \$(grep -c '^PTMEAS/CART,' '$W/replan.dmi') -ge 1 ] && tail -1 '$W/replan.dmi' | grep -q ENDFIL" \
+  "--replan: the indeterminate profile's undecided points, as PTMEAS"
+"$P" convert "$W/replan.dmi" "$W/replan.csv" || fail=1
+check "[ \$((\$(wc -l <'$W/replan.csv') - 1)) -eq \$(grep -c '^PTMEAS/CART,' '$W/replan.dmi') ]" "--replan: the program reads back, one point per PTMEAS"
+expect_error "--replan must end in .dmi" "$W/r.txt" "$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 \
+  --characteristics "$W/limit.json" --replan "$W/r.txt" --output "$W/r.csv"
+expect_error "--replan needs --characteristics" "$W/r.dmi" "$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 \
+  --replan "$W/r.dmi" --output "$W/r.csv"
 # alignment: the whole output in datum A's frame (the panel's least-squares fit): its deviations are that frame's.
 sed 's/"characteristics"/"alignment": ["A"], "characteristics"/' "$W/spec.json" >"$W/aligned.json"
 "$P" compensate --cad "$N0" --points "$W/demo/raw.csv" --probe-radius 1 --characteristics "$W/aligned.json" \

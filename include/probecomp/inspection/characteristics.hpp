@@ -62,6 +62,8 @@ struct CharacteristicResult {
   double coverage = 2.0;
   Decision decision = Decision::NotEvaluated;
   std::string reason;    // why not evaluated
+  bool too_few_points = false;  // not evaluated for want of trusted points on its faces (more would decide it)
+  std::vector<std::size_t> undecided;  // rows of the result whose d ± U crosses a limit of the zone: to measure again
 };
 
 // One datum as a frame fitted it.
