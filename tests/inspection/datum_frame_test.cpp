@@ -373,6 +373,37 @@ TEST(DatumFrame, ATangentHoleIsItsLargestInscribedCylinder) {
   }
 }
 
+TEST(DatumFrame, APinsTangentDatumIsItsSmallestCircumscribedCylinder) {
+  // A pin of radius 4 whose actual radius is 4.002 + 0.003 cos 3φ about (20.01, 19.98): its twelve points per height
+  // reach out to 4.005 at φ = 0°, 120° and 240°, three contacts 120° apart, so the smallest circumscribed cylinder is
+  // centred on the axis with radius 4.005 (least squares: 4.002). Either centres the axis at (20, 20).
+  const cad::Model model = testing::block_with_pin();
+  const int bottom = testing::face_through(model, Point3(5, 5, 0));
+  const int pin = testing::face_through(model, Point3(24, 20, 15));
+  compensation::CompensationResult r;
+  r.registration.transform = registered_pose();
+  for (double x = 5; x <= 35; x += 10) {
+    for (double y = 5; y <= 35; y += 10) add(r, Point3(x, y, 0), bottom, 0.001);
+  }
+  for (double z = 12; z <= 20; z += 4) {
+    for (int k = 0; k < 12; ++k) {
+      const double phi = 2 * M_PI * k / 12;
+      const double radius = 4.002 + 0.003 * std::cos(3 * phi);
+      add(r, Point3(20.01 + radius * std::cos(phi), 19.98 + radius * std::sin(phi), z), pin, 0.001);
+    }
+  }
+  for (const DatumFit fit : {DatumFit::Tangent, DatumFit::LeastSquares}) {
+    const DatumFrame frame = establish_frame({{"A", {bottom}}, {"P", {pin}, fit}}, model, r);
+    ASSERT_TRUE(frame.ok()) << frame.reason;
+    EXPECT_EQ(frame.datums.at(1).fixes, 2);
+    ASSERT_TRUE(frame.datums.at(1).size_change.has_value());
+    EXPECT_NEAR(*frame.datums.at(1).size_change, fit == DatumFit::Tangent ? 0.005 : 0.002, 1e-8) << to_string(fit);
+    const Point3 axis = frame.transform.inverse() * (actual_pose() * Point3(20.01, 19.98, 15));
+    EXPECT_NEAR(axis.x(), 20.0, 1e-8) << to_string(fit);
+    EXPECT_NEAR(axis.y(), 20.0, 1e-8) << to_string(fit);
+  }
+}
+
 TEST(DatumFrame, AFrameThatCannotBeSetUpSaysWhy) {
   const Block& b = block();
   const compensation::CompensationResult r = measure(Part{});
