@@ -238,9 +238,7 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
                     " needed for the motions its datums leave free)");
       continue;
     }
-    cad::Model own;
-    own.file_units = nominal.file_units;
-    for (int f : s.faces) own.faces.push_back(nominal.faces[static_cast<std::size_t>(f)]);
+    const cad::Model own = faces_of(nominal, s.faces);
     const cad::ModelLocator locator(own);
     // Least squares (not the registration's robust weights: every trusted point counts).
     const RestrictedFit fit = fit_in_motions(locator, points, frame.free_basis, frame.centre, frame.length, false);

@@ -72,6 +72,13 @@ double radius_sign(const cad::ElementarySurface& s, const cad::ModelPoint& foot)
 
 }  // namespace
 
+cad::Model faces_of(const cad::Model& nominal, const std::vector<int>& faces) {
+  cad::Model own;
+  own.file_units = nominal.file_units;
+  for (int f : faces) own.faces.push_back(nominal.faces[static_cast<std::size_t>(f)]);
+  return own;
+}
+
 RestrictedFit fit_in_motions(const cad::ModelLocator& faces, std::span<const Point3> points, const MotionBasis& basis,
                              const Point3& centre, double length, bool size_free) {
   RestrictedFit fit;
@@ -208,9 +215,7 @@ DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Mode
     const std::string datum = "datum " + spec.name;
     if (points[s].empty()) return refuse(datum + ": no trusted point on its faces");
     if (basis.cols() == 0) return refuse(datum + ": the datums before it already fix every motion");
-    cad::Model own;
-    own.file_units = nominal.file_units;
-    for (int f : spec.faces) own.faces.push_back(nominal.faces[static_cast<std::size_t>(f)]);
+    const cad::Model own = faces_of(nominal, spec.faces);
     const cad::ModelLocator locator(own);
     std::vector<Point3> moved;
     moved.reserve(points[s].size());

@@ -15,6 +15,9 @@ namespace probecomp::inspection {
 
 using MotionBasis = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 
+// Those faces of `nominal` alone, as a model to fit a datum's or a characteristic's points to.
+[[nodiscard]] cad::Model faces_of(const cad::Model& nominal, const std::vector<int>& faces);
+
 struct RestrictedFit {
   bool converged = false;
   int iterations = 0;

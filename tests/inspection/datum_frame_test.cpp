@@ -350,6 +350,24 @@ TEST(DatumFrame, ATangentPlaneRestsOnTheOutermostPoints) {
             2 * registration::normal_variance(cl, Point3(30, 20, 20), Vector3::UnitZ()));
 }
 
+// A cylinder datum after plane A, fitted tangent and by least squares: it fixes the two translations A left, its
+// size change is `sizes` (tangent, least squares), and the actual axis point `on_axis` lands on the nominal axis
+// at `centre` (x and y).
+void expect_cylinder_datum(const cad::Model& model, const compensation::CompensationResult& r, int plane, int cylinder,
+                           std::pair<double, double> sizes, const Point3& on_axis, const Point3& centre) {
+  for (const DatumFit fit : {DatumFit::Tangent, DatumFit::LeastSquares}) {
+    const DatumFrame frame = establish_frame({{"A", {plane}}, {"D", {cylinder}, fit}}, model, r);
+    ASSERT_TRUE(frame.ok()) << frame.reason;
+    EXPECT_EQ(frame.datums.at(1).fixes, 2);
+    ASSERT_TRUE(frame.datums.at(1).size_change.has_value());
+    EXPECT_NEAR(*frame.datums.at(1).size_change, fit == DatumFit::Tangent ? sizes.first : sizes.second, 1e-8)
+        << to_string(fit);
+    const Point3 axis = frame.transform.inverse() * (actual_pose() * on_axis);
+    EXPECT_NEAR(axis.x(), centre.x(), 1e-8) << to_string(fit);
+    EXPECT_NEAR(axis.y(), centre.y(), 1e-8) << to_string(fit);
+  }
+}
+
 TEST(DatumFrame, ATangentHoleIsItsLargestInscribedCylinder) {
   // The hole's radius is 5.005 + 0.003 cos 3φ about (40.02, 19.99): its twelve points per height reach in to 5.002
   // at φ = 60°, 180° and 300°, three contacts 120° apart, so the largest inscribed cylinder is centred on the axis
@@ -360,17 +378,9 @@ TEST(DatumFrame, ATangentHoleIsItsLargestInscribedCylinder) {
     return Point3(40.02, 19.99, p.z()) + (5.005 + 0.003 * std::cos(3 * phi)) * Vector3(std::cos(phi), std::sin(phi), 0);
   };
   const compensation::CompensationResult r = measure(part);
-  const Block& b = block();
-  for (const DatumFit fit : {DatumFit::Tangent, DatumFit::LeastSquares}) {
-    const DatumFrame frame = establish_frame({{"A", {b.bottom}}, {"D", {b.hole}, fit}}, b.model, r);
-    ASSERT_TRUE(frame.ok()) << frame.reason;
-    ASSERT_TRUE(frame.datums.at(1).size_change.has_value());
-    EXPECT_NEAR(*frame.datums.at(1).size_change, fit == DatumFit::Tangent ? 0.002 : 0.005, 1e-8) << to_string(fit);
-    // The hole's axis goes to (40, 20): the actual axis point (40.02, 19.99, 10) lands there.
-    const Point3 axis = frame.transform.inverse() * (actual_pose() * Point3(40.02, 19.99, 10));
-    EXPECT_NEAR(axis.x(), 40.0, 1e-8) << to_string(fit);
-    EXPECT_NEAR(axis.y(), 20.0, 1e-8) << to_string(fit);
-  }
+  // The hole's axis goes to (40, 20): the actual axis point (40.02, 19.99, 10) lands there.
+  expect_cylinder_datum(block().model, r, block().bottom, block().hole, {0.002, 0.005}, Point3(40.02, 19.99, 10),
+                        Point3(40, 20, 10));
 }
 
 TEST(DatumFrame, APinsTangentDatumIsItsSmallestCircumscribedCylinder) {
@@ -392,16 +402,7 @@ TEST(DatumFrame, APinsTangentDatumIsItsSmallestCircumscribedCylinder) {
       add(r, Point3(20.01 + radius * std::cos(phi), 19.98 + radius * std::sin(phi), z), pin, 0.001);
     }
   }
-  for (const DatumFit fit : {DatumFit::Tangent, DatumFit::LeastSquares}) {
-    const DatumFrame frame = establish_frame({{"A", {bottom}}, {"P", {pin}, fit}}, model, r);
-    ASSERT_TRUE(frame.ok()) << frame.reason;
-    EXPECT_EQ(frame.datums.at(1).fixes, 2);
-    ASSERT_TRUE(frame.datums.at(1).size_change.has_value());
-    EXPECT_NEAR(*frame.datums.at(1).size_change, fit == DatumFit::Tangent ? 0.005 : 0.002, 1e-8) << to_string(fit);
-    const Point3 axis = frame.transform.inverse() * (actual_pose() * Point3(20.01, 19.98, 15));
-    EXPECT_NEAR(axis.x(), 20.0, 1e-8) << to_string(fit);
-    EXPECT_NEAR(axis.y(), 20.0, 1e-8) << to_string(fit);
-  }
+  expect_cylinder_datum(model, r, bottom, pin, {0.005, 0.002}, Point3(20.01, 19.98, 15), Point3(20, 20, 15));
 }
 
 TEST(DatumFrame, AFrameThatCannotBeSetUpSaysWhy) {
