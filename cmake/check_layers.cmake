@@ -2,7 +2,7 @@
 # The layers, lowest first; a file's layer is its folder under ROOT/include/probecomp/ or ROOT/src/. The files
 # at include/probecomp/ itself are error.hpp and version.hpp (below everything) and the umbrella probecomp.hpp
 # (the library's top: results).
-set(layers base geometry io nurbs fitting occt cad registration compensation inspection results simulation studies selftest cli python)
+set(layers base geometry io probe nurbs fitting occt cad registration compensation inspection results simulation studies selftest cli python)
 
 function(layer_rank path out)
   if(path MATCHES "^(include/probecomp|src)/([a-z_]+)/")

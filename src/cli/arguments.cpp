@@ -138,4 +138,22 @@ void add_deformation(const std::string& spec, simulation::Deformation& d) {
                               "' is none of bump:X,Y,Z,A,W, sine:A,L,DX,DY,DZ[,...], crease:... or twist:...");
 }
 
+simulation::Pretravel parse_pretravel(const std::string& spec) {
+  const std::string what = "--pretravel P0,B,A[,N[,PHASE]] (mm, mm, mm, lobes, degrees)";
+  const std::vector<double> v = numbers(spec, what);
+  if (v.size() < 3 || v.size() > 5) {
+    throw std::invalid_argument(what + ": needs 3 to 5 numbers, got " + std::to_string(v.size()));
+  }
+  simulation::Pretravel p{.constant = v[0], .axial = v[1], .lobes = v[2]};
+  if (v.size() >= 4) {
+    // Lobes about the stylus come whole: a kinematic seat has 3, some strain-gauge probes 4 or 6.
+    if (!(v[3] >= 1.0 && v[3] <= 1000.0) || v[3] != std::floor(v[3])) {
+      throw std::invalid_argument(what + ": the lobe count N must be a positive whole number, not " + fmt("%g", v[3]));
+    }
+    p.lobe_count = static_cast<int>(v[3]);
+  }
+  if (v.size() == 5) p.phase = v[4];
+  return p;
+}
+
 }  // namespace probecomp::cli

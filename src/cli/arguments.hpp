@@ -8,6 +8,7 @@
 #include "probecomp/geometry/rigid.hpp"
 #include "probecomp/io/format.hpp"
 #include "probecomp/simulation/deformation.hpp"
+#include "probecomp/simulation/pretravel.hpp"
 
 namespace probecomp::cli {
 
@@ -31,5 +32,9 @@ void check_probe_radius(double r);
 //                               A·sin(2π d·(x − o)/L + PHASE°) along direction d, origin o (default 0,0,0),
 //                               under a Gaussian window of σ W about o when W > 0
 void add_deformation(const std::string& spec, simulation::Deformation& d);
+
+// "P0,B,A[,N[,PHASE]]" (mm, mm, mm, lobe count, degrees) → the simulated probe's pre-travel (--pretravel), the
+// stylus pointing down (−z): p(d) = P0 + B·cos²θ + A·sin²θ·cos(N(φ − PHASE)), N 3 and PHASE 0 by default.
+[[nodiscard]] simulation::Pretravel parse_pretravel(const std::string& spec);
 
 }  // namespace probecomp::cli

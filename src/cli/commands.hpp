@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "probecomp/cad/model.hpp"
+#include "probecomp/io/point_table.hpp"
 #include "probecomp/simulation/measure.hpp"
 #include "probecomp/studies/freeform_study.hpp"
 #include "probecomp/studies/registration_study.hpp"
@@ -23,6 +24,7 @@ struct CompensateArgs {
   std::string tolerance;       // "LOWER,UPPER", mm (io::parse_tolerance); empty: none
   std::string characteristics;  // SPEC.json (inspection::read_specification), or "pmi": the STEP file's; empty: none
   std::string replan;           // PLAN.dmi: the points to measure again (with characteristics); empty: none
+  std::string qualification;    // QUAL.json (probe/qualification_file.hpp): each stylus's radius by direction
   std::string units;           // of the point file (mm or inch); empty: mm, or what a DMIS file says
   std::string initial_transform;  // T.txt: 4 × 4, CAD → machine (io/transform_file.hpp); empty: identity
   // In the points' unit: every row's, or the default for rows without their own (a column r, DMIS sensors, QIF).
@@ -31,6 +33,17 @@ struct CompensateArgs {
   bool quiet = false;
 };
 int run_compensate(const CompensateArgs& args);
+
+struct QualifyArgs {
+  std::string points, output, units;  // SPHERE.(csv|dmo|qif), QUAL.json, the points' unit (mm or inch)
+  double sphere_diameter = 0.0;       // in the points' unit
+  int max_degree = 8;                 // probe::QualificationOptions::max_degree
+};
+int run_qualify(const QualifyArgs& args);
+// The stylus of a touch that names none (a point file without a column stylus or tip).
+inline constexpr const char* kDefaultStylus = "T1";
+// Each row's stylus: its column `stylus`, else `tip` (DMIS SNSLCT); empty when the file has neither.
+[[nodiscard]] std::vector<std::string> point_styli(const io::PointTable& table);
 
 struct FitArgs {
   std::string cad, points, output, json;
@@ -63,6 +76,7 @@ struct SimulateArgs {
   double spacing = 0.0, probe_radius = 0.0, noise = 0.0;
   std::string misalign;             // tx,ty,tz,rx,ry,rz (mm, degrees)
   std::vector<std::string> deform;  // bump:... and sine:... specs (see simulate --help)
+  std::string pretravel;            // P0,B,A[,N[,PHASE]] (mm, mm, mm, count, degrees); empty: none
   std::uint64_t seed = 1;
 };
 int run_simulate(const SimulateArgs& args);

@@ -23,6 +23,7 @@
 #include "probecomp/io/dmis.hpp"
 #include "probecomp/io/format.hpp"
 #include "probecomp/io/output_files.hpp"
+#include "probecomp/probe/qualification_file.hpp"
 #include "probecomp/io/point_files.hpp"
 #include "probecomp/results/report.hpp"
 #include "probecomp/io/point_table.hpp"
@@ -66,6 +67,9 @@ struct Loaded {
   cad::Model model;
   results::RunInputs inputs;  // the probe radius in mm
   std::vector<double> radii;  // each row's tip radius, mm (empty: inputs.probe_radius for every row)
+  // --qualification: each stylus's radius by direction; rows then need no radius of their own or by default (NaN in
+  // `radii` where a row has none).
+  std::optional<probe::Qualification> qualification;
   geometry::RigidTransform initial = geometry::RigidTransform::Identity();  // CAD → machine, the registration's start
   double seconds = 0.0;
 };
@@ -95,10 +99,12 @@ std::vector<double> tip_radii(const io::PointTable& t, std::optional<double> def
 // The load step: the points (in their unit: --units, a DMIS UNITS statement, else mm) and the CAD model. The
 // probe radius is in the points' unit, as a measurement program in inches states its styli.
 Loaded load(const std::string& cad_path, const std::string& points_path, std::optional<double> r,
-            const std::string& units, const std::string& initial_transform, io::ProgressBar& bar) {
+            const std::string& units, const std::string& initial_transform, io::ProgressBar& bar,
+            const std::string& qualification = {}) {
   if (r) check_probe_radius(*r);
   Loaded l;
   if (!initial_transform.empty()) l.initial = io::read_transform(initial_transform);
+  if (!qualification.empty()) l.qualification = probe::read_qualification(qualification);
   std::optional<io::LengthUnit> declared;
   if (!units.empty()) declared = io::length_unit(units);
   // The points and the model are read side by side (10 000 points: 4 ms and 3 ms). Each read's error is kept, and
@@ -125,10 +131,31 @@ Loaded load(const std::string& cad_path, const std::string& points_path, std::op
   bar.set_points(l.table.points.size());
   std::optional<double> default_mm;
   if (r) default_mm = *r * l.table.unit.mm;
-  l.radii = tip_radii(l.table, default_mm, points_path);  // its errors, too, before the model's
+  if (l.qualification) {
+    // Which styli lack a radius is known only against the qualification (compensation/qualified_radii.hpp).
+    if (l.table.radii) {
+      l.radii = *l.table.radii;
+      for (double& x : l.radii) {
+        if (std::isnan(x) && default_mm) x = *default_mm;
+      }
+    }
+  } else {
+    l.radii = tip_radii(l.table, default_mm, points_path);  // its errors, too, before the model's
+  }
   if (model_error) std::rethrow_exception(model_error);
   l.inputs = {.cad = cad_path, .points = points_path, .points_unit = l.table.unit, .probe_radius = default_mm};
-  if (l.radii.empty()) {
+  if (l.qualification) {
+    // The qualified styli's sphere-fit radii, and the nominal radii of the rest.
+    std::vector<double> radii;
+    for (const probe::StylusQualification& s : l.qualification->styli) {
+      if (s.status == probe::QualificationStatus::OK) radii.push_back(s.effective_radius);
+    }
+    for (double x : l.radii) {
+      if (!std::isnan(x)) radii.push_back(x);
+    }
+    if (default_mm) radii.push_back(*default_mm);
+    l.inputs.tip_radii = results::distinct_radii(radii);
+  } else if (l.radii.empty()) {
     l.inputs.tip_radii = {*default_mm};
   } else {
     l.inputs.tip_radii = results::distinct_radii(l.radii);
@@ -144,6 +171,11 @@ compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Met
   o.accept_doubtful_registration = accept_doubtful;
   o.probe_radius = l.inputs.tip_radii.front();
   o.probe_radii = l.radii;
+  if (l.qualification) {
+    o.qualification = &*l.qualification;
+    o.styli = point_styli(l.table);
+    o.probe_radius = l.inputs.probe_radius.value_or(0.0);
+  }
   o.registration.initial = l.initial;
   o.progress = [&bar](const std::string& stage, double f) {
     if (stage == "done") return;  // for the command, writing comes next
@@ -227,7 +259,13 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
     context.inspection = &inspection;
     context.nominal = results::registered_outline(l.model, r.registration.transform);
     if (l.table.normals) {
-      const geometry::TipRadii radii = l.radii.empty() ? geometry::TipRadii(l.inputs.tip_radii.front()) : geometry::TipRadii(l.radii);
+      std::vector<double> each;
+      if (r.qualified_radii) {
+        for (const compensation::CompensatedPoint& p : r.points) each.push_back(p.radius);
+      }
+      const geometry::TipRadii radii = r.qualified_radii ? geometry::TipRadii(each)
+                                       : l.radii.empty() ? geometry::TipRadii(l.inputs.tip_radii.front())
+                                                         : geometry::TipRadii(l.radii);
       context.conventional = compensation::conventional_contact_points(l.table.points, *l.table.normals, radii);
     }
     files.add(a.report, results::html_report(r, context));
@@ -254,10 +292,11 @@ int run_compensate(const CompensateArgs& a) {
   }
   io::check_outputs_spare_inputs({{"--output", a.output}, {"--json", a.json}, {"--report", a.report}, {"--replan", a.replan}},
                                  {{"--cad", a.cad}, {"--points", a.points}, {"--initial-transform", a.initial_transform},
-                                  {"--characteristics", a.characteristics == "pmi" ? std::string() : a.characteristics}});
+                                  {"--characteristics", a.characteristics == "pmi" ? std::string() : a.characteristics},
+                                  {"--qualification", a.qualification}});
   if (!a.tolerance.empty()) (void)tolerance_band(a.tolerance);  // a bad band fails before the run
   io::ProgressBar bar(a.quiet);
-  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform, bar);
+  const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform, bar, a.qualification);
   // The characteristics are read before the run, so that a bad specification fails before it.
   inspection::Specification spec;
   if (a.characteristics == "pmi") {

@@ -364,6 +364,11 @@ int main(int argc, char** argv) {
   simulate->add_option("--misalign", sim.misalign,
                        "Where the actual part sits: tx,ty,tz,rx,ry,rz (mm, degrees; T = Translation*Rz*Ry*Rx), default none");
   simulate->add_option("--deform", sim.deform, cli::kDeformHelp);
+  simulate->add_option("--pretravel", sim.pretravel,
+                       "P0,B,A[,N[,PHASE]]: the probe switch's pre-travel p(d) = P0 + B cos^2(t) + A sin^2(t) cos(N(phi - PHASE)), "
+                       "t the angle of the travel d from the stylus (pointing down, -z), phi its azimuth from +x, right-handed about the "
+                       "stylus (towards -y); mm, mm, mm, "
+                       "lobes (default 3), degrees (default 0). The machine reports the centre p(d) on along d");
   simulate->add_option("--noise", sim.noise, "Gaussian noise sigma on each coordinate of the centre, mm (default 0)");
   simulate->add_option("--seed", sim.seed, "Random seed of the noise (default 1)");
   simulate->add_option("--output-dir", sim.output_dir, "Directory for raw.csv, truth.csv and actual.igs")->required();
@@ -406,7 +411,30 @@ int main(int argc, char** argv) {
   compensate->add_option("--replan", comp.replan,
                          "PLAN.dmi: with --characteristics, a DMIS program of the points to measure again: where a "
                          "decision is indeterminate, and over faces with too few trusted points to judge");
+  compensate->add_option("--qualification", comp.qualification,
+                         "QUAL.json from probecomp qualify: each point's tip radius is its stylus's effective radius in "
+                         "the direction it was touched from (-(i,j,k), else against the fitted normal), and that "
+                         "radius's uncertainty joins u; styli it does not hold take r or --probe-radius");
   compensate->add_flag("--quiet", comp.quiet, "No progress on standard error");
+
+  cli::QualifyArgs qualify_args;
+  CLI::App* qualify = app.add_subcommand(
+      "qualify",
+      "Qualify styli on a reference sphere (DESIGN.md section 8): per stylus (a column stylus or tip, or DMIS SNSLCT; a "
+      "file with neither is one stylus, T1) the sphere fitted to the recorded centres, the effective tip radius, the "
+      "touches' form error and a model of the radius by approach direction (spherical harmonics of degree 0 and 2..L, "
+      "L chosen by leave-one-out). Writes QUAL.json for compensate --qualification and prints a table.");
+  qualify->add_option("--points", qualify_args.points,
+                      "SPHERE.csv, .dmo or .qif: the recorded tip centres on the sphere, with i,j,k (the sphere's "
+                      "outward normal at each programmed point) where known")
+      ->required();
+  qualify->add_option("--sphere-diameter", qualify_args.sphere_diameter,
+                      "The reference sphere's calibrated diameter, in the points' unit")
+      ->required();
+  qualify->add_option("--output", qualify_args.output, "QUAL.json")->required();
+  qualify->add_option("--units", qualify_args.units, kUnitsHelp)->check(CLI::IsMember({"mm", "inch"}));
+  qualify->add_option("--max-degree", qualify_args.max_degree,
+                      "Highest degree of the radius model tried (default 8; 0: one radius)");
 
   cli::FitArgs fit_args;
   CLI::App* fit = app.add_subcommand(
@@ -453,6 +481,7 @@ int main(int argc, char** argv) {
   try {
     if (compensate->parsed()) return cli::run_compensate(comp);
     if (fit->parsed()) return cli::run_fit(fit_args);
+    if (qualify->parsed()) return cli::run_qualify(qualify_args);
     if (demo->parsed()) return cli::run_demo(demo_args);
     if (convert->parsed()) return cli::run_convert(convert_args);
     if (info->parsed()) return run_info(part, json);

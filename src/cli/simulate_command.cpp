@@ -114,6 +114,7 @@ int run_simulate(const SimulateArgs& a) {
   for (const std::string& spec : a.deform) add_deformation(spec, deformation);
   const geometry::RigidTransform placement =
       a.misalign.empty() ? geometry::RigidTransform::Identity() : parse_misalignment(a.misalign);
+  const simulation::Pretravel pretravel = a.pretravel.empty() ? simulation::Pretravel{} : parse_pretravel(a.pretravel);
   {
     const std::filesystem::path dir(a.output_dir);
     io::check_outputs_spare_inputs(
@@ -127,7 +128,8 @@ int run_simulate(const SimulateArgs& a) {
   const cad::Model actual = simulation::actual_model(nominal, deformation, placement);
   const cad::ModelLocator locator(actual);
   const std::vector<simulation::Touch> touches =
-      simulation::simulate_touches(locator, plan, {.probe_radius = a.probe_radius, .noise_sigma = a.noise, .seed = a.seed});
+      simulation::simulate_touches(locator, plan, {.probe_radius = a.probe_radius, .noise_sigma = a.noise, .seed = a.seed,
+                                                   .pretravel = pretravel});
   int touched = 0, edge = 0;
   for (const simulation::Touch& t : touches) {
     touched += t.status != simulation::Touch::Status::Missed;
@@ -146,8 +148,10 @@ int run_simulate(const SimulateArgs& a) {
   files.add(dir / "raw.csv", raw_points_csv(touches, plan, true));
   files.commit();
   std::cout << "probecomp simulate: " << plan.size() << " programmed points, " << touched << " touched (" << edge
-            << " on a face edge), " << plan.size() - static_cast<std::size_t>(touched) << " missed; probe radius "
-            << a.probe_radius << " mm, noise sigma " << a.noise << " mm, seed " << a.seed << ".\n"
+            << " on a face edge), " << plan.size() - static_cast<std::size_t>(touched)
+            << " missed; probe radius " << a.probe_radius << " mm, noise sigma " << a.noise << " mm, seed " << a.seed
+            << (pretravel.none() ? std::string() : std::string("; pre-travel ").append(a.pretravel).append(" mm"))
+            << ".\n"
             << "Wrote " << (dir / "raw.csv").string() << " (x,y,z,i,j,k,point), truth.csv (contact, actual normal, "
             << "exact centre per point) and actual.igs (" << surfaces.size() << " untrimmed NURBS faces).\n";
   return 0;

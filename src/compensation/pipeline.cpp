@@ -11,6 +11,7 @@
 #include <string>
 
 #include "probecomp/compensation/conventional.hpp"
+#include "probecomp/compensation/qualified_radii.hpp"
 #include "probecomp/error.hpp"
 #include "probecomp/geometry/stopwatch.hpp"
 #include "probecomp/registration/credibility.hpp"
@@ -273,11 +274,18 @@ void register_without_outliers(const PreparedModel& prepared, std::span<const Po
   r = std::move(second);
 }
 
-}  // namespace
+// A qualified radius's uncertainty is along the normal, as u is: they add in quadrature.
+void add_radius_uncertainty(std::span<const double> radius_u, std::vector<CompensatedPoint>& points) {
+  for (std::size_t k = 0; k < radius_u.size() && k < points.size(); ++k) {
+    if (points[k].computed()) points[k].uncertainty = std::hypot(points[k].uncertainty, radius_u[k]);
+  }
+}
 
-CompensationResult compensate(const cad::Model& model, std::span<const Point3> raw,
-                              std::optional<std::span<const Vector3>> approach_normals,
-                              const CompensateOptions& options) {
+// The run with every point's radius known (options.probe_radius / probe_radii), each point's radius uncertainty
+// (mm, k = 1; empty: none) joining its u.
+CompensationResult compensate_with_radii(const cad::Model& model, std::span<const Point3> raw,
+                                         std::optional<std::span<const Vector3>> approach_normals,
+                                         const CompensateOptions& options, std::span<const double> radius_u) {
   const geometry::TipRadii radii = tip_radii(options, raw.size());
   check_model_and_radii(model, radii, raw.size());
   if (raw.empty()) throw InputError("no points to compensate");
@@ -297,6 +305,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   };
   if (options.method == Method::Conventional) {
     CompensationResult out = compensate_conventional(model, raw, *approach_normals, radii, options);
+    add_radius_uncertainty(radius_u, out.points);
     out.statistics = statistics(out.points);
     out.warnings = model.read_warnings;
     registration_warnings(out.registration, out.warnings);
@@ -332,6 +341,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
 
   step("compensation", 0.83);
   out.points = compensate_points(prepared, raw, out.registration, fits);
+  add_radius_uncertainty(radius_u, out.points);
   out.seconds.compensation = clock.restart();
   // Every computed point by its face (edge points are not members of their face's fit, but are its points).
   // (Runs of points share a face: its counts are looked up once a run, not once a point: 7 ms fewer at 1 M points.)
@@ -375,6 +385,48 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
                            "fitted once, and every row is compensated and reported");
   }
   step("done", 1.0);
+  return out;
+}
+
+}  // namespace
+
+CompensationResult compensate(const cad::Model& model, std::span<const Point3> raw,
+                              std::optional<std::span<const Vector3>> approach_normals,
+                              const CompensateOptions& options) {
+  if (options.qualification == nullptr) return compensate_with_radii(model, raw, approach_normals, options, {});
+  if (approach_normals && approach_normals->size() != raw.size()) {
+    throw InputError("the approach normals do not match the points in number");
+  }
+  CompensateOptions qualified = options;
+  qualified.qualification = nullptr;
+  const auto radii_for = [&](const std::vector<Vector3>& travel) {
+    QualifiedRadii q = qualified_radii(*options.qualification, options.styli, travel, options.probe_radii,
+                                       options.probe_radius);
+    qualified.probe_radii = q.radius;
+    qualified.probe_radius = *std::min_element(q.radius.begin(), q.radius.end());
+    return q;
+  };
+  std::vector<Vector3> travel(raw.size());
+  if (approach_normals) {
+    for (std::size_t k = 0; k < raw.size(); ++k) travel[k] = -(*approach_normals)[k];
+    const QualifiedRadii q = radii_for(travel);
+    CompensationResult out = compensate_with_radii(model, raw, approach_normals, qualified, q.uncertainty);
+    out.qualified_radii = true;
+    out.warnings.insert(out.warnings.end(), q.warnings.begin(), q.warnings.end());
+    return out;
+  }
+  // Without approach normals the travel is taken against the fitted normal, which needs a run: the first takes each
+  // stylus's sphere-fit radius (a travel not known yet), the second the radius against the first's normals.
+  (void)radii_for(std::vector<Vector3>(raw.size(), Vector3::Zero()));
+  const CompensationResult rough = compensate_with_radii(model, raw, std::nullopt, qualified, {});
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    const Vector3& n = rough.points[k].normal;
+    travel[k] = rough.points[k].computed() && n.squaredNorm() > 0.5 ? Vector3(-n) : Vector3::Zero();
+  }
+  QualifiedRadii q = radii_for(travel);
+  CompensationResult out = compensate_with_radii(model, raw, std::nullopt, qualified, q.uncertainty);
+  out.qualified_radii = true;
+  out.warnings.insert(out.warnings.end(), q.warnings.begin(), q.warnings.end());
   return out;
 }
 

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -22,8 +23,9 @@ using io::PointTable;
 
 void write_compensated_csv(std::ostream& stream, const PointTable& t, const compensation::CompensationResult& r,
                            const FileProgress& progress) {
-  // The tip radius of each row when the input gave any (the default filled in where a row's was empty).
-  const bool radius_column = t.radii.has_value();
+  // The tip radius of each row when the input gave any (the default filled in where a row's was empty), or when a
+  // qualification gave each its effective radius.
+  const bool radius_column = t.radii.has_value() || r.qualified_radii;
   std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "u", "face", "status"};
   if (radius_column) ours.push_back("r");
   // Rows go out in blocks, each built in its own reused string with std::to_chars: a million rows are 115 MB of
@@ -92,10 +94,14 @@ std::string compensated_dmis(const PointTable& t, const compensation::Compensati
       << "$$ along the normal (k = 1, " << u << "), face and status\n";
   out << io::dmis_units(t.unit);
   // The tips, when the input gave each point its own: as the input's sensors, with the radius each point was
-  // compensated with.
+  // compensated with; after a qualification, with their nominal radii (an effective radius is a point's, not a
+  // sensor's: the CSV output has it).
   std::vector<double> radii;
   if (t.radii) {
-    for (const compensation::CompensatedPoint& p : r.points) radii.push_back(scale * p.radius);
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+      const double nominal = (*t.radii)[k];
+      radii.push_back(scale * (r.qualified_radii && std::isfinite(nominal) ? nominal : r.points[k].radius));
+    }
   }
   DmisTips tips(t, radii);
   out << tips.definitions();

@@ -126,13 +126,20 @@ std::vector<Touch> simulate_touches(const cad::ModelLocator& actual, std::span<c
                     [&](std::size_t k) {
                       out[k] = touch(actual, plan[k], options.probe_radii.empty() ? options.probe_radius : options.probe_radii.at(k));
                     });
+  if (!options.pretravel.none()) {
+    for (std::size_t k = 0; k < out.size(); ++k) {
+      if (out[k].status == Touch::Status::Missed) continue;
+      const Vector3 d = -plan[k].normal.normalized();
+      out[k].measured = out[k].centre + options.pretravel(d) * d;
+    }
+  }
   if (options.noise_sigma > 0.0) {
     std::mt19937_64 rng(options.seed);
     std::normal_distribution<double> noise(0.0, options.noise_sigma);
     for (Touch& t : out) {
       // Drawn for every point, touched or not, so that one point's noise does not depend on another's touch.
       const Vector3 e(noise(rng), noise(rng), noise(rng));
-      if (t.status != Touch::Status::Missed) t.measured = t.centre + e;
+      if (t.status != Touch::Status::Missed) t.measured += e;
     }
   }
   return out;

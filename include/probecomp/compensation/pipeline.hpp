@@ -29,6 +29,7 @@
 #include "probecomp/fitting/adaptive.hpp"
 #include "probecomp/fitting/offset.hpp"
 #include "probecomp/geometry/tip_radii.hpp"
+#include "probecomp/probe/qualification.hpp"
 #include "probecomp/registration/icp.hpp"
 
 namespace probecomp::compensation {
@@ -288,6 +289,9 @@ struct CompensationResult {
   std::vector<CompensatedPoint> points;           // one per input point, in order
   std::vector<FaceReport> faces;                  // faces that hold points, by index
   // The radius the faces' centre surfaces are for: the smallest tip's (PreparedModel::probe_radius), mm.
+  // Each point's radius came from its stylus's qualification, by direction (CompensateOptions::qualification):
+  // CompensatedPoint::radius is that effective radius.
+  bool qualified_radii = false;
   double centre_radius = 0.0;
   Statistics statistics;
   Timings seconds;
@@ -302,6 +306,12 @@ struct CompensateOptions {
   double probe_radius = 0.0;  // mm, > 0
   // Per point (mm, > 0), when the points were taken with tips of several radii; empty: probe_radius for every point.
   std::vector<double> probe_radii{};
+  // Styli qualified on a reference sphere (probe/qualification.hpp): each point's radius is its stylus's effective
+  // radius in the direction it was touched from (−(i,j,k); without approach normals, against the normal a first run
+  // fits there), and that radius's uncertainty joins its u. Styli it does not hold take probe_radii (NaN: none) or
+  // probe_radius (0: none), as compensation/qualified_radii.hpp says. Null: probe_radius / probe_radii as they are.
+  const probe::Qualification* qualification = nullptr;
+  std::vector<std::string> styli{};  // each point's stylus, for the qualification; empty: the one it holds
   registration::RegistrationOptions registration;
   double max_initial_distance_fraction = 0.1;  // as RegisterOptions
   bool accept_doubtful_registration = false;   // as RegisterOptions::accept_doubtful

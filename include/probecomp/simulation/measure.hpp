@@ -11,6 +11,7 @@
 #include "probecomp/cad/locator.hpp"
 #include "probecomp/geometry/rigid.hpp"
 #include "probecomp/simulation/deformation.hpp"
+#include "probecomp/simulation/pretravel.hpp"
 
 namespace probecomp::simulation {
 
@@ -29,7 +30,7 @@ struct Touch {
   };
   Status status = Status::Missed;
   Point3 centre = Point3::Zero();    // the probe centre at the touch, exact
-  Point3 measured = Point3::Zero();  // centre + noise: what the machine reports
+  Point3 measured = Point3::Zero();  // centre + pre-travel + noise: what the machine reports
   Point3 contact = Point3::Zero();   // the touched point of the actual part
   Vector3 normal = Vector3::Zero();  // the actual part's outward unit normal there
   int face = -1;
@@ -58,6 +59,9 @@ struct MeasurementOptions {
   std::vector<double> probe_radii{};  // per programmed point (mm) when several tips measure; empty: probe_radius
   double noise_sigma = 0.0;   // standard deviation of Gaussian noise on each coordinate of the centre, mm
   std::uint64_t seed = 1;
+  // The switch triggers p(d) after the contact (pretravel.hpp): the machine reports centre + p(d)·d, d the unit
+  // travel direction −normal. None by default: the reported centre is the touched one (plus noise).
+  Pretravel pretravel{};
 };
 
 // The touch of each programmed point on the actual part (`actual`: its faces in the machine frame). The line's
