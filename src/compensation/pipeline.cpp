@@ -393,7 +393,10 @@ CompensationResult compensate_with_radii(const cad::Model& model, std::span<cons
 CompensationResult compensate(const cad::Model& model, std::span<const Point3> raw,
                               std::optional<std::span<const Vector3>> approach_normals,
                               const CompensateOptions& options) {
-  if (options.qualification == nullptr) return compensate_with_radii(model, raw, approach_normals, options, {});
+  // No points: the run's own refusal, before any radius is looked up.
+  if (options.qualification == nullptr || raw.empty()) {
+    return compensate_with_radii(model, raw, approach_normals, options, {});
+  }
   if (approach_normals && approach_normals->size() != raw.size()) {
     throw InputError("the approach normals do not match the points in number");
   }
