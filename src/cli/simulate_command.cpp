@@ -130,10 +130,11 @@ int run_simulate(const SimulateArgs& a) {
   const std::vector<simulation::Touch> touches =
       simulation::simulate_touches(locator, plan, {.probe_radius = a.probe_radius, .noise_sigma = a.noise, .seed = a.seed,
                                                    .pretravel = pretravel});
-  int touched = 0, edge = 0;
+  int touched = 0, edge = 0, two_faces = 0;
   for (const simulation::Touch& t : touches) {
     touched += t.status != simulation::Touch::Status::Missed;
     edge += t.status == simulation::Touch::Status::Edge;
+    two_faces += t.status == simulation::Touch::Status::TwoFaces;
   }
   if (touched == 0) throw std::invalid_argument("no programmed point touches the actual part (misalignment too large?)");
 
@@ -148,7 +149,7 @@ int run_simulate(const SimulateArgs& a) {
   files.add(dir / "raw.csv", raw_points_csv(touches, plan, true));
   files.commit();
   std::cout << "probecomp simulate: " << plan.size() << " programmed points, " << touched << " touched (" << edge
-            << " on a face edge), " << plan.size() - static_cast<std::size_t>(touched)
+            << " on a face edge, " << two_faces << " against two faces), " << plan.size() - static_cast<std::size_t>(touched)
             << " missed; probe radius " << a.probe_radius << " mm, noise sigma " << a.noise << " mm, seed " << a.seed
             << (pretravel.none() ? std::string() : std::string("; pre-travel ").append(a.pretravel).append(" mm"))
             << ".\n"

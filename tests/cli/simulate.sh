@@ -47,10 +47,12 @@ expect_error 'crease:OX,OY,OZ,DX,DY,DZ,H,W: the width W must be positive' "$B/ra
 expect_error 'twist:OX,OY,OZ,D1X,D1Y,D1Z,D2X,D2Y,D2Z,A,L: needs 11 numbers' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --deform twist:0,0,0,1,0,0 --output-dir "$B"
 expect_error 'a band needs a window W > 0' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --deform sine:0.01,8,1,0,0,0,0,0,0,0,0,1,0 --output-dir "$B"
 expect_error 'needs 6 numbers' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --misalign 1,2 --output-dir "$B"
+expect_error '--pretravel P0,B,A.*: needs 3 to 5 numbers, got 2' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --pretravel 0.002,0.003 --output-dir "$B"
+expect_error '--pretravel P0,B,A.*: the lobe count N must be a positive whole number, not 2.5' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --pretravel 0.002,0.003,0.004,2.5 --output-dir "$B"
 expect_error 'probe-radius' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0 --output-dir "$B"
 expect_error '--plan PLAN.csv or --spacing' "$B/raw.csv" "$P" simulate --cad "$CAD" --probe-radius 0.1 --output-dir "$B"
 printf 'x,y,z\n0,0,0\n' >"$W/noijk.csv"
 expect_error 'needs i,j,k' "$B/raw.csv" "$P" simulate --cad "$CAD" --plan "$W/noijk.csv" --probe-radius 0.1 --output-dir "$B"
 expect_error 'no programmed point touches' "$B/raw.csv" "$P" simulate --cad "$CAD" --plan "$W/plan.csv" --probe-radius 0.1 --misalign 50,0,0,0,0,0 --output-dir "$B"
-[ $fail -eq 0 ] && echo "simulate: files, rows, line check, compensate round trip and 10 bad inputs as promised; creases, twists and banded waves"
+[ $fail -eq 0 ] && echo "simulate: files, rows, line check, compensate round trip and 12 bad inputs as promised; creases, twists and banded waves"
 exit $fail
