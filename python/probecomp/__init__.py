@@ -110,17 +110,17 @@ class FitResult(CompensationResult):
 
 
 def _run(model, centres, probe_radius, normals, method, units, initial_transform, accept_doubtful_registration,
-         tolerance, fit):
+         tolerance, fit, qualification=None, styli=None):
     if not isinstance(model, CadModel):
         raise ValueError("model must be a probecomp.CadModel, not %s" % type(model).__name__)
     scale = _scale(units)
     centres = _points("centres", centres, scale)
     default, radii = None, _np.empty(0)
-    if probe_radius is None:
+    if probe_radius is None and qualification is None:
         raise ValueError("probe_radius is needed: the tip radius of every point, or an (N,) array of each point's")
-    if _np.ndim(probe_radius) == 0:
+    if probe_radius is not None and _np.ndim(probe_radius) == 0:
         default = float(probe_radius) * scale
-    else:
+    elif probe_radius is not None:
         radii = _np.ascontiguousarray(_np.asarray(probe_radius, dtype=_np.float64) * scale)
         if radii.ndim != 1 or len(radii) != len(centres):
             raise ValueError("probe_radius must be a number or an (N,) array for N = %d centres, not of shape %s"
@@ -134,13 +134,18 @@ def _run(model, centres, probe_radius, normals, method, units, initial_transform
             tolerance = _core.parse_tolerance(tolerance)
         else:
             tolerance = _core.parse_tolerance("%r,%r" % tuple(float(t) for t in tolerance))
+    if styli is not None:
+        styli = [str(s) for s in styli]
+        if len(styli) != len(centres):
+            raise ValueError("styli must name one stylus per centre: %d for %d" % (len(styli), len(centres)))
     run = _core.compensate(model, centres, radii, default, normals, method, initial_transform,
-                           bool(accept_doubtful_registration), fit, "<numpy array>", units)
+                           bool(accept_doubtful_registration), fit, "<numpy array>", units,
+                           "" if qualification is None else str(qualification), styli or [])
     return (FitResult if fit else CompensationResult)(run, scale, tolerance)
 
 
 def compensate(model, centres, probe_radius=None, normals=None, method="cad", *, units="mm", initial_transform=None,
-               accept_doubtful_registration=False, tolerance=None):
+               accept_doubtful_registration=False, tolerance=None, qualification=None, styli=None):
     """Compensates probe centres for the tip radius against the part's CAD model: `probecomp compensate`.
 
     model           CadModel: the part's nominal faces (STEP or IGES)
@@ -156,13 +161,17 @@ def compensate(model, centres, probe_radius=None, normals=None, method="cad", *,
     accept_doubtful_registration  return a result even when the registration is not credible (its rows say so)
                     instead of raising RegistrationError
     tolerance       optional (lower, upper) deviation band in mm, or "lower,upper": out-of-tolerance counts in stats
+    qualification   optional path of a QUAL.json (`probecomp qualify`): each point's radius is its stylus's effective
+                    radius in the direction it was touched from (-normals, else against the fitted normal), and its
+                    uncertainty joins u; probe_radius is then only the default for styli the file does not hold
+    styli           with qualification: each centre's stylus name (N str); None when the file qualifies one stylus
 
     Returns a CompensationResult (see its help). The work runs with the GIL released.
     Raises InputError (points or options the method cannot use), CadError, RegistrationError (the points could not
     be registered credibly), ValueError (arguments of the wrong shape or kind).
     """
     return _run(model, centres, probe_radius, normals, method, units, initial_transform,
-                accept_doubtful_registration, tolerance, False)
+                accept_doubtful_registration, tolerance, False, qualification, styli)
 
 
 def fit(model, centres, probe_radius=None, normals=None, *, units="mm", initial_transform=None,

@@ -76,7 +76,8 @@ class PointSet:
 def compensate(model: CadModel, centres: ArrayLike, probe_radius: Union[float, ArrayLike, None] = ...,
                normals: Optional[ArrayLike] = ..., method: str = ..., *, units: str = ...,
                initial_transform: Optional[ArrayLike] = ..., accept_doubtful_registration: bool = ...,
-               tolerance: Tolerance = ...) -> CompensationResult: ...
+               tolerance: Tolerance = ..., qualification: Optional[Path] = ...,
+               styli: Optional[Sequence[str]] = ...) -> CompensationResult: ...
 def fit(model: CadModel, centres: ArrayLike, probe_radius: Union[float, ArrayLike, None] = ...,
         normals: Optional[ArrayLike] = ..., *, units: str = ..., initial_transform: Optional[ArrayLike] = ...,
         accept_doubtful_registration: bool = ..., tolerance: Tolerance = ...) -> FitResult: ...

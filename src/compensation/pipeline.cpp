@@ -415,6 +415,8 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
     const QualifiedRadii q = radii_for(travel);
     CompensationResult out = compensate_with_radii(model, raw, approach_normals, qualified, q.uncertainty);
     out.qualified_radii = true;
+  out.styli = q.styli;
+    out.styli = q.styli;
     out.warnings.insert(out.warnings.end(), q.warnings.begin(), q.warnings.end());
     return out;
   }
@@ -429,6 +431,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
   QualifiedRadii q = radii_for(travel);
   CompensationResult out = compensate_with_radii(model, raw, std::nullopt, qualified, q.uncertainty);
   out.qualified_radii = true;
+  out.styli = q.styli;
   out.warnings.insert(out.warnings.end(), q.warnings.begin(), q.warnings.end());
   return out;
 }

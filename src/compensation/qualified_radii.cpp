@@ -33,9 +33,22 @@ QualifiedRadii qualified_radii(const probe::Qualification& qualification, std::s
   out.radius.assign(n, 0.0);
   out.uncertainty.assign(n, 0.0);
   std::map<std::string, int> unsupported, unqualified;
+  std::map<std::string, std::size_t> use;  // index into out.styli
   for (std::size_t k = 0; k < n; ++k) {
     const std::string& name = styli.empty() ? qualification.styli.front().stylus : styli[k];
     const probe::StylusQualification* q = qualification.find(name);
+    const auto [at, added] = use.emplace(name, out.styli.size());
+    if (added) {
+      StylusRadii s{.stylus = name, .qualified = q != nullptr};
+      if (q != nullptr) {
+        s.effective_radius = q->effective_radius;
+        s.variation = q->model.variation();
+        s.degree = q->model.degree();
+      }
+      out.styli.push_back(std::move(s));
+    }
+    StylusRadii& stylus_use = out.styli[at->second];
+    ++stylus_use.points;
     if (q == nullptr) {
       const double own = own_radius.empty() ? std::nan("") : own_radius[k];
       if (std::isfinite(own) && own > 0.0) {
@@ -60,7 +73,10 @@ QualifiedRadii qualified_radii(const probe::Qualification& qualification, std::s
     const probe::EffectiveRadius r = probe::effective_radius(*q, travel[k]);
     out.radius[k] = r.radius;
     out.uncertainty[k] = r.uncertainty;
-    if (r.unsupported) ++unsupported[name];
+    if (r.unsupported) {
+      ++unsupported[name];
+      ++stylus_use.unsupported;
+    }
   }
   for (const auto& [name, count] : unsupported) {
     const probe::StylusQualification& q = *qualification.find(name);

@@ -18,6 +18,7 @@
 #include "probecomp/cad/pmi.hpp"
 #include "probecomp/compensation/conventional.hpp"
 #include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/probe/qualification_file.hpp"
 #include "probecomp/error.hpp"
 #include "probecomp/geometry/stopwatch.hpp"
 #include "probecomp/inspection/characteristics.hpp"
@@ -105,7 +106,8 @@ struct Run {
 
 Run run_compensate(const cad::Model& model, const Array& centres, const Array& radii, std::optional<double> probe_radius,
                    const std::optional<Array>& normals, const std::string& method, const std::optional<Array>& initial,
-                   bool accept_doubtful, bool fit, const std::string& points_name, const std::string& unit) {
+                   bool accept_doubtful, bool fit, const std::string& points_name, const std::string& unit,
+                   const std::string& qualification, const std::vector<std::string>& styli) {
   const std::span<const Point3> points = as_points(centres, "centres");
   std::optional<std::span<const Vector3>> approach;
   if (normals) {
@@ -134,10 +136,26 @@ Run run_compensate(const cad::Model& model, const Array& centres, const Array& r
     o.probe_radii.assign(radii.data(), radii.data() + radii.size());
     run.inputs.tip_radii = results::distinct_radii(o.probe_radii);
     o.probe_radius = run.inputs.tip_radii.empty() ? 0.0 : run.inputs.tip_radii.front();
-  } else {
-    if (!probe_radius) throw std::invalid_argument("probe_radius is needed");
+  } else if (probe_radius) {
     o.probe_radius = *probe_radius;
     run.inputs.tip_radii = {*probe_radius};
+  } else if (qualification.empty()) {
+    throw std::invalid_argument("probe_radius is needed");
+  }
+  // Each point's radius from its stylus's qualification by direction (compensation/qualified_radii.hpp); the radii
+  // above are then the default for styli it does not hold.
+  std::optional<probe::Qualification> qualified;
+  if (!qualification.empty()) {
+    qualified = probe::read_qualification(qualification);
+    o.qualification = &*qualified;
+    o.styli = styli;
+    if (radii.size() == 0) o.probe_radius = probe_radius.value_or(0.0);
+    std::vector<double> each;
+    for (const probe::StylusQualification& q : qualified->styli) {
+      if (q.status == probe::QualificationStatus::OK) each.push_back(q.effective_radius);
+    }
+    for (double r : run.inputs.tip_radii) each.push_back(r);
+    run.inputs.tip_radii = results::distinct_radii(each);
   }
   if (initial) {
     if (initial->ndim() != 2 || initial->shape(0) != 4 || initial->shape(1) != 4) {
@@ -357,7 +375,7 @@ PYBIND11_MODULE(_probecomp, m) {
 
   m.def("compensate", &run_compensate, py::arg("model"), py::arg("centres"), py::arg("radii"), py::arg("probe_radius"),
         py::arg("normals"), py::arg("method"), py::arg("initial_transform"), py::arg("accept_doubtful_registration"),
-        py::arg("fit"), py::arg("points_name"), py::arg("unit"));
+        py::arg("fit"), py::arg("points_name"), py::arg("unit"), py::arg("qualification"), py::arg("styli"));
 
   m.def("parse_tolerance", [](const std::string& text) {
     results::Tolerance t;

@@ -108,6 +108,21 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
                  {"points_unit", inputs.points_unit.name},
                  {"probe_radius", inputs.probe_radius ? number(*inputs.probe_radius) : Json(nullptr)},
                  {"tip_radii", radii}};
+  if (r.qualified_radii) {
+    // Each stylus's radii by direction (compensate --qualification), and how many points it could not model.
+    Json styli = Json::array();
+    for (const compensation::StylusRadii& s : r.styli) {
+      Json one = {{"stylus", s.stylus}, {"qualified", s.qualified}, {"points", s.points}};
+      if (s.qualified) {
+        one["effective_radius"] = number(s.effective_radius);
+        one["variation"] = number(s.variation);
+        one["degree"] = s.degree;
+        one["unsupported_points"] = s.unsupported;
+      }
+      styli.push_back(one);
+    }
+    j["qualification"] = {{"styli", styli}};
+  }
   const Eigen::Matrix4d M = r.registration.transform.matrix();
   Json transform = Json::array();
   for (int a = 0; a < 4; ++a) {

@@ -63,6 +63,8 @@ awk -F, -f "$SCORE" "$W/sim/truth.csv" "$W/p_out.csv" >"$W/p_score.txt"
 echo "qualified: $(grep '^ok:' "$W/q_score.txt")"
 echo "nominal radius: $(grep '^ok:' "$W/p_score.txt")"
 check "head -1 '$W/q_out.csv' | grep -q '^x,y,z,nx,ny,nz,deviation,u,face,status,r,'" "the output has each point's effective radius, r"
+json_check "$W/q.json" "[(s['stylus'], s['qualified'], s['points'], s['unsupported_points']) for s in j['qualification']['styli']] == [('T1', True, $(($(wc -l <"$W/sim/raw.csv") - 1)), 0)] and j['qualification']['styli'][0]['degree'] >= 3" \
+  "--json: the stylus, its points, none unsupported, the model's degree"
 # score.awk's line: "ok: N rows, mean M std S max X um". Against the truth in the machine frame the qualified run keeps
 # the pre-travel's degree-1 part, which the sphere fit cannot tell from its centre (probe/qualification.hpp): one
 # translation of every point, 0.8 um along the panel's normal here, which registration takes out of the deviations.

@@ -312,3 +312,45 @@ def test_the_example_plots_the_deviations(demo, work):
     except ImportError:
         return
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10000
+
+
+def sphere_touches(path, styli):
+    """Touches of a 25 mm sphere at (100, -50, 30), closed form: each stylus (name, radius, lobes in mm) touched 150
+    times from the top to 10 degrees below the equator; its pre-travel 0.002 + lobes * sin^2 cos(3 (phi - 20 deg)),
+    phi about the stylus (-z, right-handed: towards -y), as `simulate --pretravel 0.002,0,LOBES,3,20`."""
+    golden, z_low = np.pi * (3 - np.sqrt(5)), -np.sin(np.radians(10))
+    k = np.arange(150)
+    z = 1 - (1 - z_low) * (k + 0.5) / 150
+    rho = np.sqrt(np.maximum(0, 1 - z * z))
+    n = np.stack([rho * np.cos(golden * k), rho * np.sin(golden * k), z], axis=1)
+    rows = []
+    for name, radius, lobes in styli:
+        d = -n
+        p = 0.002 + lobes * (1 - d[:, 2] ** 2) * np.cos(3 * (np.arctan2(-d[:, 1], d[:, 0]) - np.radians(20)))
+        centres = np.array([100.0, -50.0, 30.0]) + (12.5 + radius - p)[:, None] * n
+        rows += [(c, m, name) for c, m in zip(centres, n)]
+    probecomp.write_points(path, np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
+                           columns={"stylus": [r[2] for r in rows]})
+
+
+def test_a_qualification_gives_the_clis_numbers(demo, work):
+    sphere_touches(work / "sphere.csv", [("T1", 1.0, 0.004)])
+    cli("qualify", "--points", work / "sphere.csv", "--sphere-diameter", 25, "--output", work / "qual.json")
+    cli("simulate", "--cad", demo / "nominal.igs", "--spacing", 2, "--probe-radius", 1, "--misalign", "0,0,0.1,0,1,0",
+        "--pretravel", "0.002,0,0.004,3,20", "--noise", 0.001, "--output-dir", work / "lobed")
+    cli("compensate", "--cad", demo / "nominal.igs", "--points", work / "lobed" / "raw.csv", "--qualification",
+        work / "qual.json", "--output", work / "lobed_out.csv", "--quiet")
+    model = probecomp.CadModel(str(demo / "nominal.igs"))
+    raw = probecomp.read_points(work / "lobed" / "raw.csv")
+    res = probecomp.compensate(model, raw.points, normals=raw.normals, qualification=work / "qual.json")
+    assert_same_as_cli(res, work / "lobed_out.csv")
+    # Each point's effective radius: the nominal 1 mm less its pre-travel, 2 um +- 4 um by direction.
+    assert np.all(np.abs(res.radius - 0.998) < 0.005) and np.ptp(res.radius) > 1e-4
+    # Two styli qualified: the points must name theirs.
+    sphere_touches(work / "two.csv", [("T1", 1.0, 0.004), ("T2", 0.5, 0.0)])
+    cli("qualify", "--points", work / "two.csv", "--sphere-diameter", 25, "--output", work / "two.json")
+    with pytest.raises(probecomp.InputError, match="name no stylus"):
+        probecomp.compensate(model, raw.points, normals=raw.normals, qualification=work / "two.json")
+    named = probecomp.compensate(model, raw.points, normals=raw.normals, qualification=work / "two.json",
+                                 styli=["T1"] * len(raw.points))
+    assert np.allclose(named.radius, res.radius, atol=1e-12, equal_nan=True)

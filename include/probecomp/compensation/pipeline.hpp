@@ -26,6 +26,7 @@
 #include "probecomp/cad/model.hpp"
 #include "probecomp/cad/offset_model.hpp"
 #include "probecomp/compensation/outliers.hpp"
+#include "probecomp/compensation/qualified_radii.hpp"
 #include "probecomp/fitting/adaptive.hpp"
 #include "probecomp/fitting/offset.hpp"
 #include "probecomp/geometry/tip_radii.hpp"
@@ -292,6 +293,7 @@ struct CompensationResult {
   // Each point's radius came from its stylus's qualification, by direction (CompensateOptions::qualification):
   // CompensatedPoint::radius is that effective radius.
   bool qualified_radii = false;
+  std::vector<StylusRadii> styli{};  // then: how each stylus's points took their radii
   double centre_radius = 0.0;
   Statistics statistics;
   Timings seconds;

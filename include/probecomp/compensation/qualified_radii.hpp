@@ -14,10 +14,21 @@
 
 namespace probecomp::compensation {
 
+// How the points of one stylus took their radii (for --json's "qualification").
+struct StylusRadii {
+  std::string stylus;
+  bool qualified = false;     // else its points took their own or the default radius
+  int points = 0;
+  int unsupported = 0;        // approached from directions its qualification never touched from
+  double effective_radius = 0.0, variation = 0.0;  // the qualification's (mm): sphere-fit radius, rms by direction
+  int degree = 0;
+};
+
 struct QualifiedRadii {
   std::vector<double> radius;       // per point, mm
   std::vector<double> uncertainty;  // per point, the radius's standard uncertainty, mm (0 where not qualified)
   std::vector<std::string> warnings;
+  std::vector<StylusRadii> styli;   // in the order each first appears among the points
 };
 
 // `styli`: each point's stylus; empty when the points name none, and then the qualification must hold one stylus
