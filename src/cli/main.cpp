@@ -470,7 +470,7 @@ int main(int argc, char** argv) {
       "selftest",
       "Known-answer checks of this build on this machine (ISO 10360-6 style): closest points and offsets on exact "
       "plane, sphere, cylinder and torus NURBS, a fit through exact data, a known registration, both compensations of a "
-      "stored free-form case against its stored truth, NIST-style least-squares plane, sphere and cylinder data. One "
+      "stored free-form case against its stored truth, ISO 10360-5's 25 probing touches on an exact sphere through the stylus qualification, NIST-style least-squares plane, sphere and cylinder data. One "
       "line per check (ok/FAIL, the error, the limit); exit 0 only if every check passes, 1 otherwise.");
 
   try {

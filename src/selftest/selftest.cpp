@@ -17,6 +17,7 @@
 #include "probecomp/nurbs/closest_point.hpp"
 #include "probecomp/nurbs/constructors.hpp"
 #include "probecomp/registration/routes.hpp"
+#include "probecomp/probe/qualification.hpp"
 #include "probecomp/selftest/reference_elements.hpp"
 #include "probecomp/simulation/freeform_case.hpp"
 #include "probecomp/simulation/measure.hpp"
@@ -353,6 +354,36 @@ Check element_check(const ReferenceElement& e) {
   return c;
 }
 
+// ISO 10360-5's probing test on an exact sphere: its 25 touches (the pole; 4 at 22.5° from it; 8 at 45°, turned
+// 22.5°; 4 at 67.5°; 8 on the equator, turned 22.5°) by a tip whose effective radius is 0.9973 mm in every direction.
+// The qualification must give the sphere's centre, the radius, no form error and no variation by direction.
+Check probing_test() {
+  const std::string name = "probe qualification: ISO 10360-5's 25 touches on an exact 25 mm sphere (form, size, centre)";
+  const Point3 centre(210.0, -35.5, 62.25);
+  constexpr double kSphereRadius = 12.5, kEffectiveRadius = 0.9973;
+  std::vector<Point3> centres;
+  std::vector<Vector3> normals;
+  const auto ring = [&](double polar_deg, int count, double turn_deg) {
+    for (int k = 0; k < count; ++k) {
+      const double t = polar_deg * std::numbers::pi / 180, f = (turn_deg + 360.0 * k / count) * std::numbers::pi / 180;
+      const Vector3 n(std::sin(t) * std::cos(f), std::sin(t) * std::sin(f), std::cos(t));
+      normals.push_back(n);
+      centres.push_back(centre + (kSphereRadius + kEffectiveRadius) * n);
+    }
+  };
+  ring(0, 1, 0);
+  ring(22.5, 4, 0);
+  ring(45, 8, 22.5);
+  ring(67.5, 4, 0);
+  ring(90, 8, 22.5);
+  const probe::StylusQualification q = probe::qualify_stylus("T1", centres, normals, 2 * kSphereRadius);
+  if (q.status != probe::QualificationStatus::OK) return failed(name, kElementLimit, q.reason);
+  Check c = check(name, kElementLimit);
+  c.error = std::max({(q.sphere_centre - centre).norm(), std::abs(q.effective_radius - kEffectiveRadius), q.form_error,
+                      q.model.variation()});
+  return c;
+}
+
 }  // namespace
 
 std::vector<Check> run_selftest(const std::function<void(const Check&)>& done) {
@@ -386,6 +417,7 @@ std::vector<Check> run_selftest(const std::function<void(const Check&)>& done) {
   one("fit: exact data", kExactFitLimit, exact_fit);
   one("registration: known motion", kRegistrationLimit, registration_of_known_motion);
   guarded("stored free-form case", kStoredCaseRms, stored_case_checks);
+  one("probe qualification", kElementLimit, probing_test);
   for (const ReferenceElement& e : reference_elements()) one("least-squares " + e.name, kElementLimit, [&] { return element_check(e); });
   return out;
 }
