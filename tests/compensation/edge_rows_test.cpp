@@ -124,7 +124,7 @@ TEST(EdgeRows, FartherOffEveryRimTouchIsFlaggedAndNoOkRowIsFarOff) {
   for (const Placement& p : test::cases({Placement{0.052, 1.0, a, 7, true}, Placement{0.03, 0.4, a, 5, true},
                                         Placement{-0.045, 0.7, a, 9, true}, Placement{0.03, 0.3, b, 5, false},
                                         Placement{0.045, 0.2, b, 9, false}, Placement{0.052, 0.3, b, 11, false}})) {
-    SCOPED_TRACE(testing::Message() << p.angle << " rad, " << p.translation << " mm, plan follows: " << p.plan_follows_part);
+    SCOPED_TRACE(::testing::Message() << p.angle << " rad, " << p.translation << " mm, plan follows: " << p.plan_follows_part);
     const double t = p.translation;
     const EdgeRowCounts n = edge_rows_of(geometry::RigidTransform(Eigen::Translation3d(t, -0.6 * t, 0.5 * t) *
                                                                   Eigen::AngleAxisd(p.angle, p.axis.normalized())),

@@ -14,7 +14,7 @@
 namespace probecomp::io {
 namespace {
 
-std::filesystem::path write(const std::string& name, const std::string& text) {
+std::filesystem::path write_transform_file(const std::string& name, const std::string& text) {
   const auto path = std::filesystem::temp_directory_path() / ("probecomp_transform_" + name);
   std::ofstream(path) << text;
   return path;
@@ -22,7 +22,7 @@ std::filesystem::path write(const std::string& name, const std::string& text) {
 
 std::string message(const std::string& name, const std::string& text) {
   try {
-    (void)read_transform(write(name, text));
+    (void)read_transform(write_transform_file(name, text));
   } catch (const InputError& e) {
     return e.what();
   }
@@ -32,7 +32,7 @@ std::string message(const std::string& name, const std::string& text) {
 TEST(ReadTransform, FourRowsOfFourWithCommentsCommasAndTabs) {
   // 90° about z, then (1, -2.5, 3).
   const geometry::RigidTransform T =
-      read_transform(write("a.txt", "# CAD -> machine\n\n0 -1 0 1\n1,0,0,-2.5\n0\t0\t1\t+3\n0 0 0 1\n"));
+      read_transform(write_transform_file("a.txt", "# CAD -> machine\n\n0 -1 0 1\n1,0,0,-2.5\n0\t0\t1\t+3\n0 0 0 1\n"));
   EXPECT_NEAR((T * Point3(1, 0, 0) - Point3(1, -1.5, 3)).norm(), 0.0, 1e-15);
   EXPECT_NEAR((T * Point3(0, 1, 0) - Point3(0, -2.5, 3)).norm(), 0.0, 1e-15);
 }
@@ -40,7 +40,7 @@ TEST(ReadTransform, FourRowsOfFourWithCommentsCommasAndTabs) {
 TEST(ReadTransform, RoundingInTheFileIsTakenToTheNearestRotation) {
   // cos and sin of 30° to 7 digits: off orthonormal by about 1e-7, within the tolerance; the result is exact.
   const geometry::RigidTransform T =
-      read_transform(write("b.txt", "0.8660254 -0.5 0 0\n0.5 0.8660254 0 0\n0 0 1 0\n0 0 0 1\n"));
+      read_transform(write_transform_file("b.txt", "0.8660254 -0.5 0 0\n0.5 0.8660254 0 0\n0 0 1 0\n0 0 0 1\n"));
   EXPECT_NEAR((T.linear().transpose() * T.linear() - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-14);
   EXPECT_NEAR(std::atan2(T.linear()(1, 0), T.linear()(0, 0)) * 180.0 / M_PI, 30.0, 1e-5);
 }

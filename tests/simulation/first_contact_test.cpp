@@ -26,7 +26,7 @@ using namespace probecomp;
 
 constexpr double kFillet = 0.5;  // mm, tighter than the tip
 constexpr double kR = 1.0;       // mm
-constexpr double kDegree = std::numbers::pi / 180.0;
+constexpr double kFirstContactDegree = std::numbers::pi / 180.0;
 // The issue asks for 1 µm; the simulator converges to 1e-9 mm, the closed form is exact.
 constexpr double kClosedForm = 1e-6;
 // The simulator's approach point (r + 2 mm out along the normal), how far it searches or backs out (10 mm) and
@@ -111,7 +111,7 @@ std::vector<simulation::ProgrammedPoint> corner_plan(int floor, int wall, int fi
   }
   // The fillet's points, its outward normal pointing at its axis from the arc.
   for (double alpha : {0.0, 5.0, 10.0, 20.0, 30.0, 40.0, 45.0, 50.0, 60.0, 70.0, 80.0, 85.0, 90.0}) {
-    const double c = std::cos(alpha * kDegree), s = std::sin(alpha * kDegree);
+    const double c = std::cos(alpha * kFirstContactDegree), s = std::sin(alpha * kFirstContactDegree);
     plan.push_back({kCorner + Vector3(kFillet - kFillet * c, 0.0, kFillet - kFillet * s), Vector3(c, 0.0, s), fillet});
   }
   return plan;
@@ -120,7 +120,7 @@ std::vector<simulation::ProgrammedPoint> corner_plan(int floor, int wall, int fi
 geometry::RigidTransform turned_about_the_corner(double degrees, const Vector3& shift) {
   geometry::RigidTransform T = geometry::RigidTransform::Identity();
   T.translate(shift + kCorner);
-  T.rotate(Eigen::AngleAxisd(degrees * kDegree, Vector3::UnitY()));
+  T.rotate(Eigen::AngleAxisd(degrees * kFirstContactDegree, Vector3::UnitY()));
   T.translate(-kCorner);
   return T;
 }

@@ -20,7 +20,7 @@ using namespace probecomp;
 // (7e-15 mm each) where a reported centre is differenced with the touched one.
 constexpr double kExact = 1e-15;
 constexpr double kCoordinates = 1e-13;
-constexpr double kDegree = std::numbers::pi / 180.0;
+constexpr double kPretravelDegree = std::numbers::pi / 180.0;
 
 constexpr double kP0 = 0.010, kAxial = 0.003, kLobes = 0.004;  // mm
 
@@ -44,7 +44,7 @@ TEST(Pretravel, AHorizontalTouchAlongTheFirstStylusAxisTakesTheConstantPlusALobe
 
 TEST(Pretravel, ThreeLobesPutAValleyAtSixtyDegreesOfAzimuth) {
   // φ = 60°, n = 3: cos(180°) = −1, horizontal (θ = 90°).
-  const Vector3 d(std::cos(60.0 * kDegree), std::sin(60.0 * kDegree), 0.0);
+  const Vector3 d(std::cos(60.0 * kPretravelDegree), std::sin(60.0 * kPretravelDegree), 0.0);
   EXPECT_NEAR(probe()(d), kP0 - kLobes, kExact);
   // Four lobes: cos(240°) = −1/2.
   simulation::Pretravel four = probe();
@@ -57,8 +57,8 @@ TEST(Pretravel, TheAzimuthIsRightHandedAboutTheStylus) {
   // cos(3·30°) = 0 and φ = −40° gives cos(−150°) = −√3/2; the two differ only if the sense is fixed.
   simulation::Pretravel p = probe();
   p.phase = 10.0;
-  const Vector3 plus(std::cos(40.0 * kDegree), -std::sin(40.0 * kDegree), 0.0);  // φ = +40°
-  const Vector3 minus(std::cos(40.0 * kDegree), std::sin(40.0 * kDegree), 0.0);  // φ = −40°
+  const Vector3 plus(std::cos(40.0 * kPretravelDegree), -std::sin(40.0 * kPretravelDegree), 0.0);  // φ = +40°
+  const Vector3 minus(std::cos(40.0 * kPretravelDegree), std::sin(40.0 * kPretravelDegree), 0.0);  // φ = −40°
   EXPECT_NEAR(p(plus), kP0, kExact);
   EXPECT_NEAR(p(minus), kP0 - std::sqrt(3.0) / 2.0 * kLobes, kExact);
 }
@@ -73,9 +73,9 @@ TEST(Pretravel, ATiltedStylusMeasuresItsAnglesFromItsOwnAxis) {
                 e2(0.0, -1.0, 0.0);
   EXPECT_NEAR(p(s), kP0 + kAxial, kExact);
   // θ = 90°, φ = φ₀ + 0: along e1 rotated by the phase, the lobe's peak.
-  EXPECT_NEAR(p(std::cos(10.0 * kDegree) * e1 + std::sin(10.0 * kDegree) * e2), kP0 + kLobes, kExact);
+  EXPECT_NEAR(p(std::cos(10.0 * kPretravelDegree) * e1 + std::sin(10.0 * kPretravelDegree) * e2), kP0 + kLobes, kExact);
   // θ = 30°, φ = 50°: cos²θ = 3/4, sin²θ = 1/4, cos(3·40°) = −1/2.
-  const double theta = 30.0 * kDegree, phi = 50.0 * kDegree;
+  const double theta = 30.0 * kPretravelDegree, phi = 50.0 * kPretravelDegree;
   const Vector3 d = std::cos(theta) * s + std::sin(theta) * (std::cos(phi) * e1 + std::sin(phi) * e2);
   EXPECT_NEAR(p(d), kP0 + 0.75 * kAxial - 0.125 * kLobes, kExact);
 }
