@@ -146,10 +146,7 @@ Loaded load(const std::string& cad_path, const std::string& points_path, std::op
   l.inputs = {.cad = cad_path, .points = points_path, .points_unit = l.table.unit, .probe_radius = default_mm};
   if (l.qualification) {
     // The qualified styli's sphere-fit radii, and the nominal radii of the rest.
-    std::vector<double> radii;
-    for (const probe::StylusQualification& s : l.qualification->styli) {
-      if (s.status == probe::QualificationStatus::OK) radii.push_back(s.effective_radius);
-    }
+    std::vector<double> radii = l.qualification->effective_radii();
     for (double x : l.radii) {
       if (!std::isnan(x)) radii.push_back(x);
     }
@@ -260,10 +257,10 @@ void write_outputs(const CompensateArgs& a, const Loaded& l, const compensation:
     context.nominal = results::registered_outline(l.model, r.registration.transform);
     if (l.table.normals) {
       std::vector<double> each;
-      if (r.qualified_radii) {
+      if (r.qualified_radii()) {
         for (const compensation::CompensatedPoint& p : r.points) each.push_back(p.radius);
       }
-      const geometry::TipRadii radii = r.qualified_radii ? geometry::TipRadii(each)
+      const geometry::TipRadii radii = r.qualified_radii() ? geometry::TipRadii(each)
                                        : l.radii.empty() ? geometry::TipRadii(l.inputs.tip_radii.front())
                                                          : geometry::TipRadii(l.radii);
       context.conventional = compensation::conventional_contact_points(l.table.points, *l.table.normals, radii);

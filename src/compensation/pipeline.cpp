@@ -409,16 +409,18 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
     qualified.probe_radius = *std::min_element(q.radius.begin(), q.radius.end());
     return q;
   };
-  std::vector<Vector3> travel(raw.size());
-  if (approach_normals) {
-    for (std::size_t k = 0; k < raw.size(); ++k) travel[k] = -(*approach_normals)[k];
+  // The run with the radii for these travel directions, and what the qualification says about them.
+  const auto run_qualified = [&](const std::vector<Vector3>& travel) {
     const QualifiedRadii q = radii_for(travel);
     CompensationResult out = compensate_with_radii(model, raw, approach_normals, qualified, q.uncertainty);
-    out.qualified_radii = true;
-  out.styli = q.styli;
     out.styli = q.styli;
     out.warnings.insert(out.warnings.end(), q.warnings.begin(), q.warnings.end());
     return out;
+  };
+  std::vector<Vector3> travel(raw.size());
+  if (approach_normals) {
+    for (std::size_t k = 0; k < raw.size(); ++k) travel[k] = -(*approach_normals)[k];
+    return run_qualified(travel);
   }
   // Without approach normals the travel is taken against the fitted normal, which needs a run: the first takes each
   // stylus's sphere-fit radius (a travel not known yet), the second the radius against the first's normals.
@@ -428,12 +430,7 @@ CompensationResult compensate(const cad::Model& model, std::span<const Point3> r
     const Vector3& n = rough.points[k].normal;
     travel[k] = rough.points[k].computed() && n.squaredNorm() > 0.5 ? Vector3(-n) : Vector3::Zero();
   }
-  QualifiedRadii q = radii_for(travel);
-  CompensationResult out = compensate_with_radii(model, raw, std::nullopt, qualified, q.uncertainty);
-  out.qualified_radii = true;
-  out.styli = q.styli;
-  out.warnings.insert(out.warnings.end(), q.warnings.begin(), q.warnings.end());
-  return out;
+  return run_qualified(travel);
 }
 
 std::vector<nurbs::Surface> fitted_part_surfaces(const CompensationResult& result, const fitting::OffsetOptions& options) {

@@ -1,22 +1,12 @@
 #include "probecomp/compensation/qualified_radii.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <map>
 
 #include "probecomp/error.hpp"
+#include "warnings.hpp"
 
 namespace probecomp::compensation {
-
-namespace {
-
-std::string micrometres(double mm) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.2f um", mm * 1e3);
-  return text;
-}
-
-}  // namespace
 
 QualifiedRadii qualified_radii(const probe::Qualification& qualification, std::span<const std::string> styli,
                                std::span<const Vector3> travel, std::span<const double> own_radius,
@@ -84,7 +74,7 @@ QualifiedRadii qualified_radii(const probe::Qualification& qualification, std::s
                            name + " from directions its qualification never touched from (more than " +
                            std::to_string(static_cast<int>(std::lround(q.support_angle_deg))) +
                            " degrees from every touch): they take its sphere-fit radius, and their u includes how much "
-                           "its radius varies with direction (" + micrometres(q.model.variation()) + ")");
+                           "its radius varies with direction (" + detail::um(q.model.variation()) + ")");
   }
   for (const auto& [name, count] : unqualified) {
     out.warnings.push_back(std::to_string(count) + " point" + (count == 1 ? "" : "s") + " of stylus " +

@@ -295,6 +295,14 @@ EffectiveRadius effective_radius(const StylusQualification& q, const Vector3& tr
   return {q.model.radius(travel), q.model.uncertainty(travel), false};
 }
 
+std::vector<double> Qualification::effective_radii() const {
+  std::vector<double> out;
+  for (const StylusQualification& s : styli) {
+    if (s.status == QualificationStatus::OK) out.push_back(s.effective_radius);
+  }
+  return out;
+}
+
 const StylusQualification* Qualification::find(const std::string& stylus) const {
   for (const StylusQualification& s : styli) {
     if (s.stylus == stylus) return &s;

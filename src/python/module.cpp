@@ -150,11 +150,8 @@ Run run_compensate(const cad::Model& model, const Array& centres, const Array& r
     o.qualification = &*qualified;
     o.styli = styli;
     if (radii.size() == 0) o.probe_radius = probe_radius.value_or(0.0);
-    std::vector<double> each;
-    for (const probe::StylusQualification& q : qualified->styli) {
-      if (q.status == probe::QualificationStatus::OK) each.push_back(q.effective_radius);
-    }
-    for (double r : run.inputs.tip_radii) each.push_back(r);
+    std::vector<double> each = qualified->effective_radii();
+    each.insert(each.end(), run.inputs.tip_radii.begin(), run.inputs.tip_radii.end());
     run.inputs.tip_radii = results::distinct_radii(each);
   }
   if (initial) {

@@ -25,7 +25,7 @@ void write_compensated_csv(std::ostream& stream, const PointTable& t, const comp
                            const FileProgress& progress) {
   // The tip radius of each row when the input gave any (the default filled in where a row's was empty), or when a
   // qualification gave each its effective radius.
-  const bool radius_column = t.radii.has_value() || r.qualified_radii;
+  const bool radius_column = t.radii.has_value() || r.qualified_radii();
   std::vector<std::string> ours{"x", "y", "z", "nx", "ny", "nz", "deviation", "u", "face", "status"};
   if (radius_column) ours.push_back("r");
   // Rows go out in blocks, each built in its own reused string with std::to_chars: a million rows are 115 MB of
@@ -100,7 +100,7 @@ std::string compensated_dmis(const PointTable& t, const compensation::Compensati
   if (t.radii) {
     for (std::size_t k = 0; k < r.points.size(); ++k) {
       const double nominal = (*t.radii)[k];
-      radii.push_back(scale * (r.qualified_radii && std::isfinite(nominal) ? nominal : r.points[k].radius));
+      radii.push_back(scale * (r.qualified_radii() && std::isfinite(nominal) ? nominal : r.points[k].radius));
     }
   }
   DmisTips tips(t, radii);

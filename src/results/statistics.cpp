@@ -108,7 +108,7 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
                  {"points_unit", inputs.points_unit.name},
                  {"probe_radius", inputs.probe_radius ? number(*inputs.probe_radius) : Json(nullptr)},
                  {"tip_radii", radii}};
-  if (r.qualified_radii) {
+  if (r.qualified_radii()) {
     // Each stylus's radii by direction (compensate --qualification), and how many points it could not model.
     Json styli = Json::array();
     for (const compensation::StylusRadii& s : r.styli) {

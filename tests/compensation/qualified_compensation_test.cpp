@@ -118,7 +118,7 @@ TEST(QualifiedCompensation, AfterQualificationNoErrorDependsOnTheApproachDirecti
     const compensation::CompensationResult plain = compensation::compensate(nominal, raw, normals, options);
     options.qualification = &qualification;
     const compensation::CompensationResult qualified = compensation::compensate(nominal, raw, normals, options);
-    EXPECT_TRUE(qualified.qualified_radii);
+    EXPECT_TRUE(qualified.qualified_radii());
     const BinFigures before = by_direction(plain, travel), after = by_direction(qualified, travel);
     std::printf("seed %d, %zu points, %d bins: without qualification bin means spread %.2f um (worst %.2f, worst std "
                 "%.2f); with it worst mean %.2f um, worst std %.2f um\n",

@@ -290,10 +290,11 @@ struct CompensationResult {
   std::vector<CompensatedPoint> points;           // one per input point, in order
   std::vector<FaceReport> faces;                  // faces that hold points, by index
   // The radius the faces' centre surfaces are for: the smallest tip's (PreparedModel::probe_radius), mm.
-  // Each point's radius came from its stylus's qualification, by direction (CompensateOptions::qualification):
-  // CompensatedPoint::radius is that effective radius.
-  bool qualified_radii = false;
-  std::vector<StylusRadii> styli{};  // then: how each stylus's points took their radii
+  // With CompensateOptions::qualification: how each stylus's points took their radii (empty otherwise).
+  std::vector<StylusRadii> styli{};
+  // Each point's radius came from its stylus's qualification, by direction: CompensatedPoint::radius is that
+  // effective radius.
+  [[nodiscard]] bool qualified_radii() const { return !styli.empty(); }
   double centre_radius = 0.0;
   Statistics statistics;
   Timings seconds;

@@ -101,6 +101,8 @@ struct Qualification {
   std::vector<StylusQualification> styli{};
   // The stylus of that name (exact match), or null.
   [[nodiscard]] const StylusQualification* find(const std::string& stylus) const;
+  // The sphere-fit effective radius of each stylus qualified (status OK), in file order, mm.
+  [[nodiscard]] std::vector<double> effective_radii() const;
 };
 
 }  // namespace probecomp::probe
