@@ -13,7 +13,6 @@
 
 namespace probecomp::registration::detail {
 
-using nurbs::ClosestPointStatus;
 using nurbs::OsculatingPatch;
 
 namespace {
@@ -31,7 +30,7 @@ void for_blocks(std::size_t n, F&& f, std::size_t grain = 1 << 14) {
 }
 
 bool usable(const cad::ModelPoint& m, double max_distance) {
-  return m.ok() && !m.on_trim_edge && m.status != ClosestPointStatus::OnBoundary && std::abs(m.distance) <= max_distance;
+  return m.ok() && !m.on_edge() && std::abs(m.distance) <= max_distance;
 }
 
 }  // namespace
@@ -205,7 +204,7 @@ void IcpState::finish(RegistrationResult& result) const {
       pm.u = m.u;
       pm.v = m.v;
       pm.distance = m.distance;
-      pm.on_edge = m.ok() && (m.on_trim_edge || m.status == ClosestPointStatus::OnBoundary);
+      pm.on_edge = m.ok() && m.on_edge();
     }
     pm.weight = w_[i];
     result.used += use_[i];

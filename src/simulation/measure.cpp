@@ -77,8 +77,7 @@ class ProbeLine {
     // so its distance counts unsigned: the tip is as clear of its back as of its front. So does a foot on a face's
     // edge farther than r: there the sign is the side of the face's plane, and far beyond a convex edge the centre
     // lies behind the plane yet outside the part (within r, the tip's side of the edge is what the march needs).
-    const bool far_beyond_edge = (s.foot.on_trim_edge || s.foot.status == nurbs::ClosestPointStatus::OnBoundary) &&
-                                 std::abs(s.foot.distance) > r_;
+    const bool far_beyond_edge = s.foot.on_edge() && std::abs(s.foot.distance) > r_;
     const double d = sided(s.foot.face) && !far_beyond_edge ? s.foot.distance : std::abs(s.foot.distance);
     s.gap = d - r_;
     // The gradient of that distance: the unit vector from the foot point, or the face normal when the centre is on
@@ -126,7 +125,7 @@ Touch touched_at(const ProbeLine& line, const LineSample& s) {
   if (!s.foot.ok() || std::abs(s.gap) > kTouchTolerance) return out;
   const cad::ModelPoint& foot = s.foot;
   const Point3 centre = line.centre(s.t);
-  const bool edge = foot.on_trim_edge || foot.status == nurbs::ClosestPointStatus::OnBoundary;
+  const bool edge = foot.on_edge();
   // Against the back of a loose face (one whose material side is not known: distances to it count unsigned), the
   // tip came from inside the part as the file orients it: the plan's normal or the model is wrong there, and no
   // probe touches so. At a face's edge the sign is only the side of the face's plane: behind it, the centre may be

@@ -28,6 +28,8 @@ struct ModelPoint {
   [[nodiscard]] bool ok() const {
     return status == nurbs::ClosestPointStatus::Converged || status == nurbs::ClosestPointStatus::OnBoundary;
   }
+  // On the face's edge: its trim, or its surface's domain boundary.
+  [[nodiscard]] bool on_edge() const { return on_trim_edge || status == nurbs::ClosestPointStatus::OnBoundary; }
 };
 static_assert(sizeof(ModelPoint) == 80);
 
