@@ -98,6 +98,7 @@ struct StudyArgs {
 // The studies `probecomp study` knows, in the order of the paper's sections.
 extern const std::vector<std::string> kStudyNames;
 int run_study(const StudyArgs& args);
+int run_study_approach_angle(const StudyArgs& args);  // approach_angle_study_command.cpp
 
 
 }  // namespace probecomp::cli

@@ -324,6 +324,8 @@ int main(int argc, char** argv) {
                "its figures DIR/NAME*.svg and DIR/index.html (every study run into DIR on one self-contained page).");
   study->add_option("name", study_args.name,
                     "analytic-cylinder: conventional error on a misaligned circle, exact (Figs 3 and 5)\n"
+                    "approach-angle: Fig. 3 touched by a lobing probe, with and without its qualification on a "
+                    "sphere; ISO 10360-5's probing test\n"
                     "registration: the registration Monte Carlo of Table 1 (cube corner, 900 points, 30 misalignments)\n"
                     "cylinder-misalignment: cylinder moved 2 mm, sigma 0-40 um, both methods (Fig. 8)\n"
                     "cylinder-deformation: cylinder with a local sine of peak 0.5/1/1.5 mm, sigma 0-40 um (Fig. 9)\n"

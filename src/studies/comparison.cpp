@@ -61,7 +61,8 @@ MethodComparison compare_methods(const SimulatedMeasurement& m, const Comparison
   const cad::ModelLocator actual_locator(actual);
   out.touches = simulation::simulate_touches(
       actual_locator, m.plan,
-      {.probe_radius = m.probe_radius, .probe_radii = m.probe_radii, .noise_sigma = m.noise_sigma, .seed = m.seed});
+      {.probe_radius = m.probe_radius, .probe_radii = m.probe_radii, .noise_sigma = m.noise_sigma, .seed = m.seed,
+       .pretravel = m.pretravel});
   if (m.repeats_are_copies) {
     for (std::size_t k = 1; k < out.touches.size(); ++k) {
       if (m.plan[k].point == m.plan[k - 1].point && m.plan[k].normal == m.plan[k - 1].normal) {

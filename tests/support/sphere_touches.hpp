@@ -5,11 +5,11 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
-#include <numbers>
 #include <random>
 #include <vector>
 
 #include "probecomp/geometry/types.hpp"
+#include "probecomp/simulation/reference_sphere.hpp"
 
 namespace probecomp::test {
 
@@ -18,20 +18,8 @@ struct SphereTouches {
   std::vector<Vector3> normals;  // outward, as (i,j,k)
 };
 
-// `count` programmed normals on a spiral from the top (+z) down to `lowest_deg` below the equator (negative: above
-// it), evenly spread over that cap (golden-angle azimuths), turned by `azimuth_deg`.
-inline std::vector<Vector3> sphere_cap_normals(int count, double lowest_deg, double azimuth_deg = 0.0) {
-  std::vector<Vector3> out;
-  const double z_low = -std::sin(lowest_deg * std::numbers::pi / 180.0);
-  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
-  for (int k = 0; k < count; ++k) {
-    const double z = 1.0 - (1.0 - z_low) * (k + 0.5) / count;
-    const double rho = std::sqrt(std::max(0.0, 1.0 - z * z));
-    const double phi = golden * k + azimuth_deg * std::numbers::pi / 180.0;
-    out.emplace_back(rho * std::cos(phi), rho * std::sin(phi), z);
-  }
-  return out;
-}
+// The cap's spiral of programmed normals is the simulator's (simulation/reference_sphere.hpp).
+using simulation::sphere_cap_normals;
 
 inline SphereTouches touch_sphere(const Point3& centre, double sphere_radius, double tip_radius,
                                   const std::vector<Vector3>& normals,

@@ -14,6 +14,7 @@
 #include "probecomp/geometry/rigid.hpp"
 #include "probecomp/simulation/deformation.hpp"
 #include "probecomp/simulation/measure.hpp"
+#include "probecomp/simulation/pretravel.hpp"
 
 namespace probecomp::studies {
 
@@ -33,6 +34,7 @@ struct SimulatedMeasurement {
   std::vector<double> probe_radii{};        // per programmed point (mm), several tips; empty: probe_radius
   double noise_sigma = 0.0;                 // mm, on each coordinate of the centre
   std::uint64_t seed = 1;                   // the noise
+  simulation::Pretravel pretravel{};        // the probe's switch (none: the reported centre is the touched one)
   // A programmed point equal to the one before it (point and normal) is a sample the probe recorded twice: the
   // same reading written again (a scanner's repeated sample), not a new touch with its own noise.
   bool repeats_are_copies = false;
