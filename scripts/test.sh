@@ -20,7 +20,8 @@ if [ "${1:-}" = "--sanitize" ]; then
   export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}"
   export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp:print_suppressions=0}"
   export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
-  # Accuracy studies that run, on a larger case, the code a lighter test named beside each runs here too: the
+  # Accuracy studies that run, on a larger case, the code a lighter test named beside each runs here too (the dent
+  # refined: that test's fit refines too; several k-d blocks: two are), and the package's consumer build: the
   # sanitizers would see nothing new in them, and CI must stay within 30 minutes. The Release build runs them all.
   release_only=(
     ShapeSuite.ScanLinesAtThreeMicrometresAreFollowed                   # ShapeSuite.ScanLinesWithoutNoise...
@@ -33,6 +34,9 @@ if [ "${1:-}" = "--sanitize" ]; then
     CrossValidation.OnScanLinesLeavingSpansOutKeepsTheNormalsBetweenTheLines  # the other CrossValidation tests
     Pipeline.FreeformCaseWithAnotherNoiseDrawMeetsTheBars               # Pipeline.FreeformCaseOnTheGridMeetsTheBars
     FreeformStudy.UncertaintyCoversTheTrueErrorOnThePanelAndInEachRegion_SteepDentLowNoise  # ..._RandomPointsLowNoise
+    FitSurface.ADentTheNominalKnotsCannotFollowIsRefinedUntilTheResidualsAreNoise  # Pipeline.TheStepsComposeToCompensate
+    NearestOthers.ACloudOfSeveralBlocksFindsWhatBruteForceFinds         # NearestOthers.TenThousandPointsInTwoBlocks...
+    package.consumer    # an outside project built against the installed package: its code is the library's, run here
   )
   exclude=(-E "^($(IFS='|'; echo "${release_only[*]}"))\$")
 fi
