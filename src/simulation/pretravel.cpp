@@ -17,4 +17,14 @@ double Pretravel::operator()(const Vector3& travel) const {
   return constant + axial * cos_theta * cos_theta + lobes * sin2_theta * std::cos(lobe_count * (phi - phase_rad));
 }
 
+Pretravel lobing_probe() {
+  Pretravel p;
+  p.constant = 0.002;
+  p.axial = 0.003;
+  p.lobes = 0.004;
+  p.lobe_count = 3;
+  p.phase = 20.0;
+  return p;
+}
+
 }  // namespace probecomp::simulation

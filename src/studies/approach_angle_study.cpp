@@ -22,11 +22,9 @@ constexpr double kRadiansPerDegree = std::numbers::pi / 180.0;
 // The arc reaches 30° beyond the planned angles on either side: a 2 mm shift along z moves the contact of a
 // horizontal touch about 10.5° round the actual circle (asin(dy / (R + r))), and the tip must not reach an edge.
 constexpr double kArcBeyondDeg = 30.0;
-// The reference spheres: where the qualification sphere and the probing test's stand in the machine (mm), and
-// how far below the equator the qualification touches reach (the part's horizontal touches lie on the equator).
+// Where the qualification sphere and the probing test's stand in the machine (mm).
 const Point3 kQualificationSphere(400.0, 250.0, 80.0);
 const Point3 kProbingTestSphere(-150.0, 320.0, 45.0);
-constexpr double kQualificationLowestDeg = 10.0;
 
 // ISO 10360-5: the sphere fitted (least squares) to the contact points; P_FTU is the range of their radial
 // distances from its centre, P_STU its diameter minus the sphere's.
@@ -75,16 +73,6 @@ void over_bins(const std::vector<ApproachAngleBin>& bins, ErrorSummary ApproachA
 
 }  // namespace
 
-simulation::Pretravel lobing_probe() {
-  simulation::Pretravel p;
-  p.constant = 0.002;
-  p.axial = 0.003;
-  p.lobes = 0.004;
-  p.lobe_count = 3;
-  p.phase = 20.0;
-  return p;
-}
-
 double ApproachAngleStudyResult::worst_bin_mean(ErrorSummary ApproachAngleBin::*method) const {
   double worst = 0.0;
   over_bins(bins, method, [&](const ErrorSummary& s) { worst = std::max(worst, std::abs(s.mean)); });
@@ -113,7 +101,7 @@ ApproachAngleStudyResult run_approach_angle_study(const ApproachAngleStudyOption
   // 1. The stylus qualified on the reference sphere, with the probe it will measure with.
   const simulation::SphereTouches sphere = simulation::touch_reference_sphere(
       kQualificationSphere, o.sphere_diameter / 2.0, o.probe_radius,
-      simulation::sphere_cap_normals(o.sphere_touches, kQualificationLowestDeg), o.probe, o.sphere_noise, o.seed + 1);
+      simulation::sphere_cap_normals(o.sphere_touches, o.sphere_lowest_deg), o.probe, o.sphere_noise, o.seed + 1);
   out.qualification = probe::qualify_stylus("T1", sphere.centres, sphere.normals, o.sphere_diameter);
   probe::Qualification qualification;
   qualification.styli.push_back(out.qualification);

@@ -1,9 +1,11 @@
 #!/bin/sh
 # probecomp simulate end to end: a plan from --spacing and one from --plan, with a misalignment, a bump and a
 # sine; raw.csv, truth.csv and actual.igs written with the promised columns and rows; compensate runs on the
-# result; bad inputs fail with one line and leave no file. Usage: simulate.sh PROBECOMP CAD_DIR WORK_DIR
+# result; bad inputs fail with one line and leave no file. Usage: simulate.sh PROBECOMP CAD_DIR WORK_DIR [light]
+# light (the sanitizer build): not the crease, twist and banded wave, whose surface fits take half a minute there and
+# which Deformation.* run through the sanitizers too.
 set -u
-P=$1; CAD=$2/asitus_wavy-cube.stp; W=$3
+P=$1; CAD=$2/asitus_wavy-cube.stp; W=$3; LIGHT=${4:-}
 rm -rf "$W"; mkdir -p "$W"
 fail=0
 . "$(dirname "$0")/lib.sh"
@@ -35,10 +37,12 @@ paste -d, "$W/plan.csv" "$W/b/raw.csv" | awk -F, 'NR > 1 {
   END { exit bad }' || fail=1
 
 # Creases, twists and banded waves are accepted and simulated.
-"$P" simulate --cad "$CAD" --faces 2 --spacing 0.1 --probe-radius 0.1 --deform crease:0.5,0.5,0,1,1,0,0.005,0.1 \
-  --deform twist:0.5,0.5,0,1,0,0,0,1,0,0.003,0.5 --deform sine:0.002,0.3,1,0,0,0.5,0.5,0,0.1,0,0,1,0 \
-  --output-dir "$W/c" >"$W/c.txt" || { echo "FAIL: simulate with a crease, a twist and a banded wave"; cat "$W/c.txt"; fail=1; }
-grep -q ' 0 missed' "$W/c.txt" || { echo "FAIL: creased, twisted face missed"; cat "$W/c.txt"; fail=1; }
+if [ "$LIGHT" != light ]; then
+  "$P" simulate --cad "$CAD" --faces 2 --spacing 0.1 --probe-radius 0.1 --deform crease:0.5,0.5,0,1,1,0,0.005,0.1 \
+    --deform twist:0.5,0.5,0,1,0,0,0,1,0,0.003,0.5 --deform sine:0.002,0.3,1,0,0,0.5,0.5,0,0.1,0,0,1,0 \
+    --output-dir "$W/c" >"$W/c.txt" || { echo "FAIL: simulate with a crease, a twist and a banded wave"; cat "$W/c.txt"; fail=1; }
+  grep -q ' 0 missed' "$W/c.txt" || { echo "FAIL: creased, twisted face missed"; cat "$W/c.txt"; fail=1; }
+fi
 
 B="$W/bad"
 expect_error 'bump:X,Y,Z,A,W' "$B/raw.csv" "$P" simulate --cad "$CAD" --spacing 0.1 --probe-radius 0.1 --deform bump:1,2,3 --output-dir "$B"

@@ -27,14 +27,7 @@ namespace {
 constexpr double kTip = 1.0;
 constexpr double kPartNoise = 0.001, kSphereNoise = 0.0003;  // the issue's: 1 µm on the part, 0.3 µm on the sphere
 
-simulation::Pretravel lobing_probe() {
-  simulation::Pretravel p;
-  p.constant = 0.002;
-  p.axial = 0.003;   // vertical touches 3 µm more than horizontal ones
-  p.lobes = 0.004;   // ±4 µm about the stylus
-  p.phase = 20.0;
-  return p;
-}
+using simulation::lobing_probe;  // the probe
 
 // Bins of the travel direction: vertical (within 5° of the stylus), then three bands of the angle from it by eight
 // sectors of azimuth: 25 bins.

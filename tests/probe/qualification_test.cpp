@@ -26,15 +26,7 @@ constexpr double kSphereDiameter = 25.0;  // a usual reference sphere, mm
 constexpr double kTip = 1.0;
 const Point3 kSphereCentre(312.5, -40.25, 118.0);
 
-// The probe: three lobes of ±4 µm, 3 µm between vertical and horizontal touches.
-simulation::Pretravel lobing_probe() {
-  simulation::Pretravel p;
-  p.constant = 0.002;
-  p.axial = 0.003;
-  p.lobes = 0.004;
-  p.phase = 20.0;
-  return p;
-}
+using simulation::lobing_probe;  // the probe
 
 // The model's error as a part sees it, over travel directions from vertical to horizontal: the model's radius less
 // `truth`, less the best-fitting degree-1 part of that difference (a·n for every direction: one translation of every

@@ -27,4 +27,8 @@ struct Pretravel {
   [[nodiscard]] bool none() const { return constant == 0.0 && axial == 0.0 && lobes == 0.0; }
 };
 
+// The kinematic probe of issue 52 and the approach-angle study: ±4 µm of three lobes about a vertical stylus (phase
+// 20°), 3 µm more along the stylus than across it, 2 µm constant.
+[[nodiscard]] Pretravel lobing_probe();
+
 }  // namespace probecomp::simulation

@@ -10,7 +10,8 @@
 // approach angle; the CAD method's deviations are binned too. The part is moved rigidly and not deformed, so each
 // true deviation is zero and the deviation is the error as the inspection reports it: relative to the registered
 // part, without the one translation of all the stylus's points that the qualification cannot see (its radius
-// model's degree 1, which the sphere fit puts into the sphere's centre: probe/qualification.hpp). Beside it, ISO 10360-5's probing test on a second sphere: 25 touches, the form error P_FTU and
+// model's degree 1, which the sphere fit puts into the sphere's centre: probe/qualification.hpp). How large that
+// translation is depends on how far below the sphere's equator the qualification reaches (sphere_lowest_deg). Beside it, ISO 10360-5's probing test on a second sphere: 25 touches, the form error P_FTU and
 // the size error P_STU of the contact points with the sphere fit's one radius and with the model's.
 //
 // Frame: the cylinder's axis is x; the approach angle θ runs from +y (a horizontal touch, travel −y) through +z
@@ -25,9 +26,6 @@
 
 namespace probecomp::studies {
 
-// The probe: ±4 µm of three-lobed pre-travel about the stylus, 3 µm more along it than across it.
-[[nodiscard]] simulation::Pretravel lobing_probe();
-
 struct ApproachAngleStudyOptions {
   double cylinder_radius = 10.0, probe_radius = 1.0;  // mm: the paper's experiment
   double misalignment = 2.0;                          // dy, mm along +z
@@ -35,10 +33,11 @@ struct ApproachAngleStudyOptions {
   int angles = 100;    // approach angles per section, evenly from 0° to 180°
   int sections = 5;    // sections across the axis, evenly over its middle 80 %: angles × sections touches
   int bins = 18;       // of the approach angle, each 180° / bins wide
-  simulation::Pretravel probe = lobing_probe();
+  simulation::Pretravel probe = simulation::lobing_probe();
   double part_noise = 0.001, sphere_noise = 0.0003;   // σ on each coordinate of a centre, mm
   double sphere_diameter = 25.0;                      // the reference sphere's, mm
-  int sphere_touches = 120;                           // qualification: a spiral from the top to 10° below the equator
+  int sphere_touches = 120;                           // qualification: a spiral from the top down to
+  double sphere_lowest_deg = 10.0;                    //   this far below the equator (degrees)
   std::uint64_t seed = 1;                             // the part's noise; the spheres' draw from seed + 1, seed + 2
 };
 
