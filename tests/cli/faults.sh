@@ -11,7 +11,7 @@ P=$1; W=$2; LIGHT=${3:-}
 rm -rf "$W"; mkdir -p "$W"
 fail=0
 . "$(dirname "$0")/lib.sh"
-"$P" demo --output-dir "$W/demo" >/dev/null || { echo "FAIL: demo"; exit 1; }
+demo_files "$W/demo" || { echo "FAIL: demo"; exit 1; }
 N="$W/demo/nominal.igs"
 # A larger scan (32 k points), so that an interrupt can land in every stage of a run.
 "$P" simulate --cad "$N" --spacing "$([ "$LIGHT" = light ] && echo 0.8 || echo 0.4)" --probe-radius 1 --noise 0.001 --misalign 0.1,0,0,0,0,0.2 \

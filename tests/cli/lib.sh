@@ -13,6 +13,16 @@ expect_error() {
   fi
 }
 
+# demo_files DIR: the demo's files (nominal.igs, raw.csv, ...) in DIR: copied from PROBECOMP_DEMO_FILES, where ctest's
+# fixture cli.demo_files made them once, or made by `probecomp demo` when the script runs on its own. Needs P.
+demo_files() {
+  if [ -n "${PROBECOMP_DEMO_FILES:-}" ] && [ -s "$PROBECOMP_DEMO_FILES/raw.csv" ]; then
+    mkdir -p "$1" && cp "$PROBECOMP_DEMO_FILES"/* "$1"/
+  else
+    "$P" demo --output-dir "$1" >/dev/null
+  fi
+}
+
 # check CONDITION DESCRIPTION: evaluates CONDITION; when false, prints "FAIL: DESCRIPTION" and sets fail=1.
 check() { if ! eval "$1"; then echo "FAIL: $2"; fail=1; fi; }
 # status_of command...: the command's exit status, its output discarded.

@@ -92,7 +92,7 @@ check "[ \"\$(cat '$W/tips.csv')\" = \"\$(printf 'x,y,z,i,j,k,r,label,tip\n10.12
 
 # Compensation from QIF: the demo's points, each row's radius 1 mm in ProbeRadius (no --probe-radius), in two sets
 # and a third of one point; the same figures as from the CSV; the output QIF validates.
-"$P" demo --output-dir "$W/demo" >/dev/null || { echo "FAIL: demo"; fail=1; }
+demo_files "$W/demo" || { echo "FAIL: demo"; fail=1; }
 awk -F, -v OFS=, 'NR == 1 { print $0, "r", "set"; next } { print $0, 1, (NR < 3000 ? 5 : 6) }' "$W/demo/raw.csv" >"$W/raw.csv"
 "$P" convert "$W/raw.csv" "$W/raw.qif" && validates "$W/raw.qif" || fail=1
 check "[ \$(grep -c '<ProbeRadius>1</ProbeRadius>' '$W/raw.qif') -eq 2 ]" "raw.qif: two sets, radius 1"

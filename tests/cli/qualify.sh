@@ -47,7 +47,7 @@ expect_error "--points" "" "$P" qualify --points "$W/sphere.csv" --sphere-diamet
 check "[ \$(wc -l <'$W/sphere.csv') -eq 301 ]" "the input is untouched"
 
 # The demo's panel touched with T1's probe (pre-travel as above), compensated with and without the qualification.
-"$P" demo --output-dir "$W/demo" >/dev/null || { echo "FAIL: demo"; fail=1; }
+demo_files "$W/demo" || { echo "FAIL: demo"; fail=1; }
 PANEL="$W/demo/nominal.igs"
 "$P" simulate --cad "$PANEL" --spacing $SPACING --probe-radius 1 --misalign 0,0,0.2,0,1.5,0 --pretravel 0.002,0.003,0.004,3,20 \
   --noise 0.001 --seed 3 --output-dir "$W/sim" >/dev/null || { echo "FAIL: simulate --pretravel"; fail=1; }

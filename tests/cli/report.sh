@@ -17,7 +17,7 @@ fail=0
 CHECK="python3 $(dirname "$0")/../results/check_report.py"
 command -v chromium >/dev/null || { echo "FAIL: chromium is not installed (scripts/setup.sh --tests installs it)"; exit 1; }
 
-"$P" demo --output-dir "$W/demo" >/dev/null || { echo "FAIL: demo"; fail=1; }
+demo_files "$W/demo" || { echo "FAIL: demo"; fail=1; }
 echo "the demo's report:"
 $CHECK "$W/demo/report.html" - --chromium --expect-tolerance --expect-difference || fail=1
 "$P" compensate --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --tolerance -0.05,0.05 \

@@ -13,7 +13,7 @@ fail=0
 check_result() { [ "$LIGHT" = light ] || check "$@"; }
 SCORE="$(dirname "$0")/score.awk"
 
-"$P" demo --output-dir "$W/demo" >/dev/null || { echo "FAIL: demo"; fail=1; }
+demo_files "$W/demo" || { echo "FAIL: demo"; fail=1; }
 PANEL="$W/demo/nominal.igs"
 for r in 1 0.5; do
   "$P" simulate --cad "$PANEL" --spacing $SPACING --probe-radius $r --misalign 0,0,0.2,0,1.5,0 \
