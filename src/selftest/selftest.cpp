@@ -21,6 +21,7 @@
 #include "probecomp/selftest/reference_elements.hpp"
 #include "probecomp/simulation/freeform_case.hpp"
 #include "probecomp/simulation/measure.hpp"
+#include "probecomp/simulation/reference_sphere.hpp"
 #include "selftest/random.hpp"
 #include "selftest_case.hpp"  // kStoredFreeformCaseParts: src/selftest/freeform_case.csv, generated into the build
 
@@ -361,21 +362,9 @@ Check probing_test() {
   const std::string name = "probe qualification: ISO 10360-5's 25 touches on an exact 25 mm sphere (form, size, centre)";
   const Point3 centre(210.0, -35.5, 62.25);
   constexpr double kSphereRadius = 12.5, kEffectiveRadius = 0.9973;
+  const std::vector<Vector3> normals = simulation::iso10360_5_normals();
   std::vector<Point3> centres;
-  std::vector<Vector3> normals;
-  const auto ring = [&](double polar_deg, int count, double turn_deg) {
-    for (int k = 0; k < count; ++k) {
-      const double t = polar_deg * std::numbers::pi / 180, f = (turn_deg + 360.0 * k / count) * std::numbers::pi / 180;
-      const Vector3 n(std::sin(t) * std::cos(f), std::sin(t) * std::sin(f), std::cos(t));
-      normals.push_back(n);
-      centres.push_back(centre + (kSphereRadius + kEffectiveRadius) * n);
-    }
-  };
-  ring(0, 1, 0);
-  ring(22.5, 4, 0);
-  ring(45, 8, 22.5);
-  ring(67.5, 4, 0);
-  ring(90, 8, 22.5);
+  for (const Vector3& n : normals) centres.push_back(centre + (kSphereRadius + kEffectiveRadius) * n);
   const probe::StylusQualification q = probe::qualify_stylus("T1", centres, normals, 2 * kSphereRadius);
   if (q.status != probe::QualificationStatus::OK) return failed(name, kElementLimit, q.reason);
   Check c = check(name, kElementLimit);
