@@ -43,8 +43,9 @@ std::vector<Vector3> iso10360_5_normals() {
 }
 
 SphereTouches touch_reference_sphere(const Point3& centre, double sphere_radius, double tip_radius,
-                                     const std::vector<Vector3>& normals, const Pretravel& pretravel,
-                                     double noise_sigma, std::uint64_t seed) {
+                                     const std::vector<Vector3>& normals,
+                                     const std::function<double(const Vector3&)>& pretravel, double noise_sigma,
+                                     std::uint64_t seed) {
   SphereTouches t;
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> noise(0.0, 1.0);

@@ -51,11 +51,7 @@ TEST(ReferenceSphere, CapNormalsStayOnTheirCapAndSpreadOverIt) {
 }
 
 TEST(ReferenceSphere, EachCentreLiesTheTipRadiusLessThePretravelOutAlongItsNormal) {
-  Pretravel p;
-  p.constant = 0.002;
-  p.axial = 0.003;
-  p.lobes = 0.004;
-  p.phase = 20.0;
+  const Pretravel p = lobing_probe();  // 2 µm + 3 µm cos²θ + 4 µm sin²θ cos(3(φ − 20°)), written out below
   const Point3 c(12.0, -40.0, 7.5);
   const double R = 12.5, r = 1.5;
   std::vector<Vector3> normals = sphere_cap_normals(50, 20.0);

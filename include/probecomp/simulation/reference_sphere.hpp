@@ -5,6 +5,7 @@
 // coordinate. A sphere is convex and alone: the first contact needs no search.
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "probecomp/geometry/types.hpp"
@@ -26,10 +27,11 @@ struct SphereTouches {
 [[nodiscard]] std::vector<Vector3> iso10360_5_normals();
 
 // The touches at the given normals (any length > 0) of a sphere of radius `sphere_radius` (mm) centred at
-// `centre`, by a tip of radius `tip_radius` with the given pre-travel; noise σ (mm) from `seed`, one draw of three
-// per touch in order.
+// `centre`, by a tip of radius `tip_radius` whose pre-travel is p(travel) (a Pretravel, or any function of the unit
+// travel direction, mm); noise σ (mm) from `seed`, one draw of three per touch in order.
 [[nodiscard]] SphereTouches touch_reference_sphere(const Point3& centre, double sphere_radius, double tip_radius,
-                                                   const std::vector<Vector3>& normals, const Pretravel& pretravel,
+                                                   const std::vector<Vector3>& normals,
+                                                   const std::function<double(const Vector3&)>& pretravel,
                                                    double noise_sigma, std::uint64_t seed);
 
 }  // namespace probecomp::simulation
