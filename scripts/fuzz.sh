@@ -1,30 +1,27 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets (fuzz/, clang with AddressSanitizer and UndefinedBehaviorSanitizer) in build-fuzz/ and
-# runs each for SECONDS (default 30), as many at once as there are cores, from its seed corpus: fuzz/corpus/TARGET,
-# plus the CAD files for the CAD targets and the QIF sample for the QIF one. Exits non-zero if any target crashes,
-# leaks or trips a sanitizer; libFuzzer leaves the input as build-fuzz/findings/crash-* (keep it as a regression
-# test). Prints the executions of each target.
+# Builds the libFuzzer targets (fuzz/) in the sanitizer build, build-sanitize/ (clang, AddressSanitizer and
+# UndefinedBehaviorSanitizer: scripts/sanitize_build.sh), and runs each for SECONDS (default 30), as many at once as
+# there are cores, from its seed corpus: fuzz/corpus/TARGET, plus the CAD files for the CAD targets and the QIF sample
+# for the QIF one. Exits non-zero if any target crashes, leaks or trips a sanitizer; libFuzzer leaves the input as
+# build-sanitize/fuzz-findings/crash-* (keep it as a regression test). Prints the executions of each target.
 #   scripts/fuzz.sh [SECONDS] [TARGET...]      (targets: points_csv points_dmis points_qif transform cad_step cad_iges)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-30}
 ./scripts/setup.sh --fuzz
-# A unity build (as the sanitizer build): a target's files compiled in batches, about half the build time.
-CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPROBECOMP_FUZZ=ON -DCMAKE_UNITY_BUILD=ON \
-  -DPROBECOMP_BUILD_TESTS=OFF -DPROBECOMP_BUILD_BENCH=OFF -DPROBECOMP_BUILD_PYTHON=OFF >/dev/null
+source scripts/sanitize_build.sh
+configure_sanitize_build
+out=$sanitize_build_dir/fuzz-findings
 targets=(points_csv points_dmis points_qif transform cad_step cad_iges)
 [ $# -gt 1 ] && targets=("${@:2}")
-cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]/#/fuzz_}"
+cmake --build "$sanitize_build_dir" -j"$(nproc)" --target "${targets[@]/#/fuzz_}"
 
-export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"
-export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp:print_suppressions=0}"
-export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
-mkdir -p build-fuzz/findings
+mkdir -p "$out"
 # One target: its line of summary on standard output, status 1 if it failed.
 fuzz_one() {
   local target=$1
-  # The working corpus grows in build-fuzz/corpus; the seeds in the source tree are only read.
-  work="build-fuzz/corpus/$target"
+  # The working corpus grows in fuzz-corpus/ of the build; the seeds in the source tree are only read.
+  work="$sanitize_build_dir/fuzz-corpus/$target"
   mkdir -p "$work"
   seeds=()
   [ -d "fuzz/corpus/$target" ] && seeds+=("fuzz/corpus/$target")
@@ -36,15 +33,16 @@ fuzz_one() {
     *) files=() ;;
   esac
   if [ ${#files[@]} -gt 0 ]; then
-    mkdir -p "build-fuzz/seeds/$target" && cp "${files[@]}" "build-fuzz/seeds/$target/" && seeds+=("build-fuzz/seeds/$target")
+    mkdir -p "$sanitize_build_dir/fuzz-seeds/$target" && cp "${files[@]}" "$sanitize_build_dir/fuzz-seeds/$target/" &&
+      seeds+=("$sanitize_build_dir/fuzz-seeds/$target")
   fi
-  log="build-fuzz/findings/$target.log"
+  log="$out/$target.log"
   # -max_len: the CAD seeds are tens of kB; the rest stay small so that mutations stay near the grammar.
   max_len=4096
   case $target in cad_*|points_qif) max_len=65536 ;; esac
   status=0
-  "build-fuzz/fuzz/fuzz_$target" "$work" "${seeds[@]}" -max_total_time="$seconds" -max_len="$max_len" \
-    -artifact_prefix="build-fuzz/findings/$target-" -print_final_stats=1 >"$log" 2>&1 || status=$?
+  "$sanitize_build_dir/fuzz/fuzz_$target" "$work" "${seeds[@]}" -max_total_time="$seconds" -max_len="$max_len" \
+    -artifact_prefix="$out/$target-" -print_final_stats=1 >"$log" 2>&1 || status=$?
   if [ $status -eq 0 ]; then
     runs=$(grep -m1 -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' || echo '?')
     echo "fuzz_$target: ok, $runs executions in ${seconds} s"
@@ -58,12 +56,12 @@ fuzz_one() {
 # The targets side by side, one per core (each libFuzzer process is single-threaded), their summaries in order.
 for target in "${targets[@]}"; do
   while [ "$(jobs -rp | wc -l)" -ge "$(nproc)" ]; do wait -n || true; done
-  fuzz_one "$target" >"build-fuzz/findings/$target.summary" &
+  fuzz_one "$target" >"$out/$target.summary" &
 done
 wait
 failed=0
 for target in "${targets[@]}"; do
-  cat "build-fuzz/findings/$target.summary"
-  if grep -q FAILED "build-fuzz/findings/$target.summary"; then failed=1; fi
+  cat "$out/$target.summary"
+  if grep -q FAILED "$out/$target.summary"; then failed=1; fi
 done
 exit $failed

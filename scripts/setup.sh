@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages probecomp builds against, only those that are missing; with --tests also what the
 # tests need beyond the build (a browser for the HTML report, Python for its checker); with --fuzz the compiler of
-# the fuzz targets (clang with its libFuzzer runtime).
+# the sanitizer build and its fuzz targets (clang with its libFuzzer runtime).
 # Safe to run repeatedly: when everything is present it does nothing and needs no network.
 set -euo pipefail
 
@@ -33,7 +33,7 @@ if [ "${1:-}" = "--tests" ]; then
   )
 fi
 if [ "${1:-}" = "--fuzz" ]; then
-  packages+=(clang libclang-rt-dev) # -fsanitize=fuzzer: its runtime is only recommended by clang, so named (scripts/fuzz.sh)
+  packages+=(clang libclang-rt-dev) # -fsanitize=fuzzer: its runtime is only recommended by clang, so named
 fi
 
 missing=()

@@ -118,7 +118,8 @@ validates "$W/judged.qif" || fail=1
 check "[ \$(grep -c '<SurfaceProfileCharacteristicMeasurement id=' '$W/judged.qif') -eq 3 ]" "judged.qif: three characteristic measurements"
 check "grep -q '<CharacteristicStatusEnum>PASS</CharacteristicStatusEnum>' '$W/judged.qif' && grep -q '<CharacteristicStatusEnum>FAIL</CharacteristicStatusEnum>' '$W/judged.qif'" \
   "judged.qif: PASS and FAIL as --json's decisions"
-json_check "$W/judged.json" "'>%.7f' % j['characteristics'][0]['value'] in open('$W/judged.qif').read() and '<OuterDisposition>0.050000000</OuterDisposition>' in open('$W/judged.qif').read()" \
+# (The document's first measurement's Value, to the rounding of both texts: 9 decimals there, 9 digits in the JSON.)
+json_check "$W/judged.json" "abs(float(__import__('re').search(r'<SurfaceProfileCharacteristicMeasurement .*?<Value[^>]*>([^<]+)</Value>', open('$W/judged.qif').read(), 16).group(1)) - j['characteristics'][0]['value']) <= 5.1e-10 + 5e-9 * abs(j['characteristics'][0]['value']) and '<OuterDisposition>0.050000000</OuterDisposition>' in open('$W/judged.qif').read()" \
   "judged.qif: the value and the outer disposition as --json's" || fail=1
 
 # Bad inputs: one line naming the file and the line, a non-zero exit, no output.
