@@ -2,14 +2,13 @@
 # sanitizers' settings. clang, AddressSanitizer and UndefinedBehaviorSanitizer at -O1, with libFuzzer's coverage
 # (-DPROBECOMP_FUZZ=ON): the tests and the fuzz targets link the same instrumented library, compiled once (CI within
 # 30 minutes; clang also compiled our template-heavy files in two thirds of gcc's time). No Python package: the
-# interpreter would have to preload the sanitizers' runtime to load it. A unity build (each target's files compiled
-# in batches) halves the build time; the Release build compiles every file on its own, so each still includes what
-# it uses.
+# interpreter would have to preload the sanitizers' runtime to load it. A unity build, as every build by default
+# (CMakeLists.txt).
 sanitize_build_dir=build-sanitize
 configure_sanitize_build() {
   # The compiler named, not taken from CXX: CXX is read only when a build folder is first configured.
   cmake -S . -B "$sanitize_build_dir" -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Debug -DPROBECOMP_SANITIZE=ON \
-    -DPROBECOMP_FUZZ=ON -DPROBECOMP_BUILD_BENCH=OFF -DPROBECOMP_BUILD_PYTHON=OFF -DCMAKE_UNITY_BUILD=ON >/dev/null
+    -DPROBECOMP_FUZZ=ON -DPROBECOMP_BUILD_BENCH=OFF -DPROBECOMP_BUILD_PYTHON=OFF >/dev/null
 }
 # Stop at the first report, leaks included.
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}"
