@@ -3,7 +3,7 @@
 # NAME.csv and NAME.json with the promised content, its figures (NAME*.svg) and NAME.section.html; index.html in the
 # same directory gathers the sections of all of them, self-contained. Usage: studies.sh PROBECOMP WORK_DIR [light]
 # light (the sanitizer build): the free-form noise sweep, two more fits of the free-form case (34 s there), is left to
-# the Release run; the index then holds four sections.
+# the Release run; the index then holds three sections.
 set -u
 P=$1; W=$2; LIGHT=${3:-}
 rm -rf "$W"; mkdir -p "$W"
