@@ -17,9 +17,9 @@
 #include "probecomp/probe/qualification.hpp"
 #include "probecomp/simulation/measure.hpp"
 #include "probecomp/simulation/pretravel.hpp"
+#include "probecomp/simulation/reference_sphere.hpp"
 #include "support/light.hpp"
 #include "support/prismatic_parts.hpp"
-#include "support/sphere_touches.hpp"
 
 namespace probecomp {
 namespace {
@@ -28,6 +28,9 @@ constexpr double kTip = 1.0;
 constexpr double kPartNoise = 0.001, kSphereNoise = 0.0003;  // the issue's: 1 µm on the part, 0.3 µm on the sphere
 
 using simulation::lobing_probe;  // the probe
+using simulation::SphereTouches;  // the simulator's closed-form touches of a reference sphere
+using simulation::sphere_cap_normals;
+using simulation::touch_reference_sphere;
 
 // Bins of the travel direction: vertical (within 5° of the stylus), then three bands of the angle from it by eight
 // sectors of azimuth: 25 bins.
@@ -76,9 +79,9 @@ TEST(QualifiedCompensation, AfterQualificationNoErrorDependsOnTheApproachDirecti
   const simulation::Pretravel probe = lobing_probe();
   for (std::uint64_t seed : test::cases<std::uint64_t>({1, 2, 3})) {
     // The stylus qualified on a 25 mm sphere: 120 touches from the top to 10° below its equator.
-    const test::SphereTouches sphere = test::touch_sphere(Point3(400, 250, 80), 12.5, kTip,
-                                                          test::sphere_cap_normals(120, 10.0, 7.0 * seed), probe,
-                                                          kSphereNoise, 100 + seed);
+    const SphereTouches sphere = touch_reference_sphere(Point3(400, 250, 80), 12.5, kTip,
+                                                        sphere_cap_normals(120, 10.0, 7.0 * seed), probe,
+                                                        kSphereNoise, 100 + seed);
     probe::Qualification qualification;
     qualification.styli.push_back(probe::qualify_stylus("T1", sphere.centres, sphere.normals, 25.0));
     ASSERT_EQ(qualification.styli[0].status, probe::QualificationStatus::OK);

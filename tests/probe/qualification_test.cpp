@@ -16,8 +16,8 @@
 #include "probecomp/error.hpp"
 #include "probecomp/probe/qualification_file.hpp"
 #include "probecomp/simulation/pretravel.hpp"
+#include "probecomp/simulation/reference_sphere.hpp"
 #include "support/light.hpp"
-#include "support/sphere_touches.hpp"
 
 namespace probecomp::probe {
 namespace {
@@ -27,6 +27,9 @@ constexpr double kTip = 1.0;
 const Point3 kSphereCentre(312.5, -40.25, 118.0);
 
 using simulation::lobing_probe;  // the probe
+using simulation::SphereTouches;  // the simulator's closed-form touches of a reference sphere
+using simulation::sphere_cap_normals;
+using simulation::touch_reference_sphere;
 
 // The model's error as a part sees it, over travel directions from vertical to horizontal: the model's radius less
 // `truth`, less the best-fitting degree-1 part of that difference (a·n for every direction: one translation of every
@@ -36,7 +39,7 @@ struct SeenError {
   double rms = 0.0, worst = 0.0, within_2u = 0.0;
 };
 SeenError seen_error(const StylusQualification& q, const std::function<double(const Vector3&)>& truth) {
-  const std::vector<Vector3> normals = test::sphere_cap_normals(400, 0.0, 7.0);
+  const std::vector<Vector3> normals = sphere_cap_normals(400, 0.0, 7.0);
   Eigen::MatrixXd a(normals.size(), 3);
   Eigen::VectorXd e(normals.size()), u(normals.size());
   for (std::size_t i = 0; i < normals.size(); ++i) {
@@ -55,11 +58,11 @@ SeenError seen_error(const StylusQualification& q, const std::function<double(co
 }
 
 // 120 touches from the top to 10° below the equator: a qualification that maps a probe's lobing.
-std::vector<Vector3> mapping_normals() { return test::sphere_cap_normals(120, 10.0); }
+std::vector<Vector3> mapping_normals() { return sphere_cap_normals(120, 10.0); }
 
 TEST(Qualification, AnIdealProbeGivesTheSphereAndItsRadiusExactly) {
-  const test::SphereTouches t = test::touch_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
-                                                   [](const Vector3&) { return 0.0; }, 0.0, 1);
+  const SphereTouches t = touch_reference_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
+                                                 [](const Vector3&) { return 0.0; }, 0.0, 1);
   const StylusQualification q = qualify_stylus("T1", t.centres, t.normals, kSphereDiameter);
   ASSERT_EQ(q.status, QualificationStatus::OK) << q.reason;
   EXPECT_LT((q.sphere_centre - kSphereCentre).norm(), 1e-10);
@@ -73,8 +76,8 @@ TEST(Qualification, AnEffectiveRadiusOfDegreeOneIsTheSpheresCentre) {
   // p(d) = b·(d·e) of degree 1: to first order the sphere moved by b·e, its radius unchanged.
   const Vector3 e = Vector3(0.2, -0.3, 0.93).normalized();
   const double b = 0.004;
-  const test::SphereTouches t = test::touch_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
-                                                   [&](const Vector3& d) { return b * d.dot(e); }, 0.0, 1);
+  const SphereTouches t = touch_reference_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
+                                                 [&](const Vector3& d) { return b * d.dot(e); }, 0.0, 1);
   const StylusQualification q = qualify_stylus("T1", t.centres, t.normals, kSphereDiameter);
   ASSERT_EQ(q.status, QualificationStatus::OK) << q.reason;
   // centre + (R + r + b n·e) n = (centre + b e) + (R + r) n − b (e − (n·e) n): to first order in b/R the sphere
@@ -86,8 +89,8 @@ TEST(Qualification, AnEffectiveRadiusOfDegreeOneIsTheSpheresCentre) {
 
 TEST(Qualification, ALobingProbeIsModelledWhereItWasTouched) {
   const simulation::Pretravel probe = lobing_probe();
-  const test::SphereTouches t = test::touch_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
-                                                   probe, 0.0, 1);
+  const SphereTouches t = touch_reference_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
+                                                 probe, 0.0, 1);
   const StylusQualification q = qualify_stylus("T1", t.centres, t.normals, kSphereDiameter);
   ASSERT_EQ(q.status, QualificationStatus::OK) << q.reason;
   EXPECT_GE(q.model.degree(), 3);
@@ -101,15 +104,15 @@ TEST(Qualification, ALobingProbeIsModelledWhereItWasTouched) {
 
 TEST(Qualification, WithNoiseTheRadiusAndItsModelHoldOverSeeds) {
   const simulation::Pretravel probe = lobing_probe();
-  const test::SphereTouches exact =
-      test::touch_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(), probe, 0.0, 1);
+  const SphereTouches exact =
+      touch_reference_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(), probe, 0.0, 1);
   const StylusQualification truth = qualify_stylus("T1", exact.centres, exact.normals, kSphereDiameter);
   ASSERT_EQ(truth.status, QualificationStatus::OK);
   double worst_radius = 0.0, worst_model = 0.0, sum_rms = 0.0, lowest_within = 1.0;
   int seeds = 0;
   for (std::uint64_t seed : test::cases<std::uint64_t>({1, 2, 3, 4, 5, 6, 7, 8})) {
-    const test::SphereTouches t =
-        test::touch_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(), probe, 0.0003, seed);
+    const SphereTouches t =
+        touch_reference_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(), probe, 0.0003, seed);
     const StylusQualification q = qualify_stylus("T1", t.centres, t.normals, kSphereDiameter);
     ASSERT_EQ(q.status, QualificationStatus::OK);
     // The bar: the effective radius within 0.5 µm of the noise-free touches' sphere fit.
@@ -132,8 +135,8 @@ TEST(Qualification, WithNoiseTheRadiusAndItsModelHoldOverSeeds) {
 }
 
 TEST(Qualification, DirectionsNeverTouchedAreNotExtrapolated) {
-  const test::SphereTouches t = test::touch_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
-                                                   lobing_probe(), 0.0, 1);
+  const SphereTouches t = touch_reference_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
+                                                 lobing_probe(), 0.0, 1);
   const StylusQualification q = qualify_stylus("T1", t.centres, t.normals, kSphereDiameter);
   ASSERT_EQ(q.status, QualificationStatus::OK);
   const EffectiveRadius from_below = effective_radius(q, Vector3(0, 0, 1));  // travelling up: a touch from below
@@ -144,16 +147,16 @@ TEST(Qualification, DirectionsNeverTouchedAreNotExtrapolated) {
 }
 
 TEST(Qualification, TooFewTouchesAreSaidSo) {
-  const test::SphereTouches t = test::touch_sphere(kSphereCentre, kSphereDiameter / 2, kTip,
-                                                   test::sphere_cap_normals(4, -20.0), [](const Vector3&) { return 0.0; }, 0.0, 1);
+  const SphereTouches t = touch_reference_sphere(kSphereCentre, kSphereDiameter / 2, kTip, sphere_cap_normals(4, -20.0),
+                                                 [](const Vector3&) { return 0.0; }, 0.0, 1);
   const StylusQualification q = qualify_stylus("T2", t.centres, t.normals, kSphereDiameter);
   EXPECT_EQ(q.status, QualificationStatus::TooFewTouches);
   EXPECT_NE(q.reason.find("4 touches"), std::string::npos) << q.reason;
 }
 
 TEST(Qualification, WithoutNormalsTheDirectionsComeFromTheSphere) {
-  const test::SphereTouches t = test::touch_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
-                                                   lobing_probe(), 0.0, 1);
+  const SphereTouches t = touch_reference_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
+                                                 lobing_probe(), 0.0, 1);
   const StylusQualification with = qualify_stylus("T1", t.centres, t.normals, kSphereDiameter);
   const StylusQualification without = qualify_stylus("T1", t.centres, {}, kSphereDiameter);
   ASSERT_EQ(without.status, QualificationStatus::OK);
@@ -164,8 +167,8 @@ TEST(Qualification, WithoutNormalsTheDirectionsComeFromTheSphere) {
 }
 
 TEST(QualificationFile, ReadsBackWhatItWrites) {
-  const test::SphereTouches t = test::touch_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
-                                                   lobing_probe(), 0.0003, 5);
+  const SphereTouches t = touch_reference_sphere(kSphereCentre, kSphereDiameter / 2, kTip, mapping_normals(),
+                                                 lobing_probe(), 0.0003, 5);
   Qualification q;
   q.styli.push_back(qualify_stylus("T1", t.centres, t.normals, kSphereDiameter));
   q.styli.push_back(qualify_stylus("T2", std::span(t.centres).first(3), std::span(t.normals).first(3), kSphereDiameter));
@@ -175,7 +178,7 @@ TEST(QualificationFile, ReadsBackWhatItWrites) {
   ASSERT_NE(t1, nullptr);
   EXPECT_EQ(back.find("T2")->status, QualificationStatus::TooFewTouches);
   EXPECT_EQ(back.find("T3"), nullptr);
-  for (const Vector3& n : test::sphere_cap_normals(30, 0.0, 5.0)) {
+  for (const Vector3& n : sphere_cap_normals(30, 0.0, 5.0)) {
     const EffectiveRadius a = effective_radius(q.styli[0], -n), b = effective_radius(*t1, -n);
     EXPECT_NEAR(a.radius, b.radius, 1e-11);
     EXPECT_NEAR(a.uncertainty, b.uncertainty, 1e-9);
