@@ -17,6 +17,7 @@
 
 #include "probecomp/cad/locator.hpp"
 #include "probecomp/cad/plan.hpp"
+#include "probecomp/simulation/random.hpp"
 
 namespace {
 
@@ -33,7 +34,8 @@ std::vector<Point3> points_around(const cad::Model& model) {
   std::vector<Point3> out;
   for (int k = 0; k < 100'000; ++k) {
     const cad::PlannedPoint& p = plan[pick(rng)];
-    out.push_back(p.point + off(rng) * p.normal + Vector3(side(rng), side(rng), side(rng)));
+    const Vector3 aside = simulation::draw_vector(side, rng);  // before `off`: the order gcc drew them in one expression
+    out.push_back(p.point + off(rng) * p.normal + aside);
   }
   return out;
 }

@@ -9,6 +9,7 @@
 #include "probecomp/fitting/least_squares.hpp"
 #include "probecomp/fitting/offset.hpp"
 #include "probecomp/fitting/penalized.hpp"
+#include "probecomp/simulation/random.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace {
@@ -35,7 +36,7 @@ void BM_FitControlPoints(benchmark::State& state) {
     std::vector<double> w;
     for (int i = 0; i < truth.num_u(); ++i)
       for (int j = 0; j < truth.num_v(); ++j) {
-        P.push_back(truth.control_point(i, j) + Vector3(d(rng), d(rng), d(rng)));
+        P.push_back(truth.control_point(i, j) + simulation::draw_vector(d, rng));
         w.push_back(truth.weight(i, j));
       }
     start = nurbs::Surface(truth.U(), truth.V(), P, w);

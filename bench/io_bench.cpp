@@ -14,6 +14,7 @@
 #include "probecomp/io/point_table.hpp"
 #include "probecomp/results/files.hpp"
 #include "probecomp/results/statistics.hpp"
+#include "probecomp/simulation/random.hpp"
 
 namespace {
 
@@ -28,8 +29,9 @@ compensation::CompensationResult rows() {
   r.points.resize(kRows);
   for (compensation::CompensatedPoint& p : r.points) {
     p.status = compensation::PointStatus::Ok;
-    p.contact = Point3(x(rng), x(rng), 0.1 * x(rng));
-    p.normal = Vector3(d(rng), d(rng), 1.0).normalized();
+    p.contact = simulation::draw_vector(x, rng).cwiseProduct(Vector3(1.0, 1.0, 0.1));
+    const double ny = d(rng), nx = d(rng);  // as gcc drew them as the constructor's arguments
+    p.normal = Vector3(nx, ny, 1.0).normalized();
     p.deviation = d(rng);
     p.uncertainty = 0.001 + 0.01 * std::abs(d(rng));
     p.face = 0;

@@ -20,6 +20,7 @@
 #include "probecomp/compensation/normal_support.hpp"
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/simulation/freeform_case.hpp"
+#include "probecomp/simulation/random.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace {
@@ -63,7 +64,7 @@ const Input& panel_1m() {
     for (int k = 0; k < 1'000'000; ++k) {
       const double u = t(rng), v = t(rng);
       i.raw.push_back(T * (nurbs::evaluate(s, u, v) + 1.0 * nurbs::unit_normal(s, u, v).n) +
-                      Vector3(noise(rng), noise(rng), noise(rng)));
+                      simulation::draw_vector(noise, rng));
     }
     return i;
   }();

@@ -7,6 +7,8 @@
 #include <limits>
 #include <random>
 
+#include "probecomp/simulation/random.hpp"
+
 namespace probecomp::simulation {
 
 namespace {
@@ -358,7 +360,7 @@ std::vector<Touch> simulate_touches(const cad::ModelLocator& actual, std::span<c
     std::normal_distribution<double> noise(0.0, options.noise_sigma);
     for (Touch& t : out) {
       // Drawn for every point, touched or not, so that one point's noise does not depend on another's touch.
-      const Vector3 e(noise(rng), noise(rng), noise(rng));
+      const Vector3 e = draw_vector(noise, rng);
       if (t.status != Touch::Status::Missed) t.measured += e;
     }
   }

@@ -5,6 +5,8 @@
 #include <numbers>
 #include <random>
 
+#include "probecomp/simulation/random.hpp"
+
 namespace probecomp::simulation {
 
 namespace {
@@ -51,7 +53,7 @@ SphereTouches touch_reference_sphere(const Point3& centre, double sphere_radius,
   std::normal_distribution<double> noise(0.0, 1.0);
   for (const Vector3& normal : normals) {
     const Vector3 n = normal.normalized();
-    const Vector3 e(noise(rng), noise(rng), noise(rng));
+    const Vector3 e = draw_vector(noise, rng);
     t.centres.push_back(centre + (sphere_radius + tip_radius - pretravel(-n)) * n + noise_sigma * e);
     t.normals.push_back(n);
   }

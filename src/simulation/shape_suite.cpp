@@ -8,6 +8,7 @@
 
 #include "probecomp/nurbs/constructors.hpp"
 #include "probecomp/simulation/freeform_case.hpp"
+#include "probecomp/simulation/random.hpp"
 
 namespace probecomp::simulation {
 
@@ -77,7 +78,7 @@ ShapeCase make_case(BaseSurface base, Sampling sampling, double sigma_um, std::v
   c.rx = angle(rng);
   c.ry = angle(rng);
   c.rz = 0.3 * angle(rng);
-  c.t = Vector3(shift(rng), shift(rng), shift(rng));
+  c.t = draw_vector(shift, rng);
   return c;
 }
 

@@ -7,6 +7,7 @@
 #include "probecomp/compensation/conventional.hpp"
 #include "probecomp/nurbs/constructors.hpp"
 #include "probecomp/registration/routes.hpp"
+#include "probecomp/simulation/random.hpp"
 
 namespace probecomp::studies {
 
@@ -104,12 +105,12 @@ RegistrationStudyResult run_registration_study(const RegistrationStudyOptions& o
     misalignment.rx = options.max_rotation * unit(rng);
     misalignment.ry = options.max_rotation * unit(rng);
     misalignment.rz = options.max_rotation * unit(rng);
-    misalignment.t = Vector3(unit(rng), unit(rng), unit(rng)) * options.max_translation;
+    misalignment.t = simulation::draw_vector(unit, rng) * options.max_translation;
     const geometry::RigidTransform M = geometry::from_pose(misalignment);
     std::vector<Point3> raw(points.size());
     for (std::size_t i = 0; i < points.size(); ++i) {
       raw[i] = M * (points[i] + options.probe_radius * normals[i]);
-      if (options.noise > 0.0) raw[i] += options.noise * Vector3(gauss(rng), gauss(rng), gauss(rng));
+      if (options.noise > 0.0) raw[i] += options.noise * simulation::draw_vector(gauss, rng);
     }
     registration::RegistrationOptions reg = options.registration;
     reg.initial = geometry::RigidTransform::Identity();

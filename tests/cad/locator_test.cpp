@@ -19,6 +19,7 @@
 #include "probecomp/cad/locator.hpp"
 #include "probecomp/cad/plan.hpp"
 #include "probecomp/compensation/pipeline.hpp"
+#include "probecomp/simulation/random.hpp"
 #include "support/data_files.hpp"
 #include "support/occt_files.hpp"
 
@@ -53,7 +54,8 @@ std::vector<Point3> points_around(const Model& model, std::size_t n, std::uint64
   std::vector<Point3> out;
   for (std::size_t k = 0; k < n; ++k) {
     const PlannedPoint& p = plan[pick(rng)];
-    out.push_back(p.point + off(rng) * p.normal + Vector3(side(rng), side(rng), side(rng)));
+    const Vector3 aside = simulation::draw_vector(side, rng);  // before `off`: the order gcc drew them in one expression
+    out.push_back(p.point + off(rng) * p.normal + aside);
   }
   return out;
 }
@@ -166,7 +168,7 @@ MovedQueries moved_queries(const Model& model, std::uint64_t seed, double step) 
   MovedQueries q{points_around(model, 3000, seed), {}};
   std::mt19937_64 rng(seed + 1);
   std::uniform_real_distribution<double> d(-step, step);
-  for (const Point3& p : q.before) q.after.push_back(p + Vector3(d(rng), d(rng), d(rng)));
+  for (const Point3& p : q.before) q.after.push_back(p + simulation::draw_vector(d, rng));
   return q;
 }
 

@@ -14,6 +14,7 @@
 #include "probecomp/fitting/penalized.hpp"
 #include "probecomp/nurbs/closest_point.hpp"
 #include "probecomp/nurbs/knot_insertion.hpp"
+#include "probecomp/simulation/random.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace probecomp::fitting {
@@ -68,7 +69,7 @@ TEST(CrossValidation, OnScanLinesLeavingSpansOutKeepsTheNormalsBetweenTheLines) 
   for (int l = 0; l < 21; ++l) {  // 21 lines 4.5 mm apart over 90 mm of the 200 mm panel, a point every 0.4 mm
     for (int k = 0; k < 225; ++k) {
       const double u = 0.35 + 0.45 * k / 224.0, v = 0.35 + 0.45 * l / 20.0;
-      const Point3 x = nurbs::evaluate(truth.surface, u, v) + Vector3(noise(rng), noise(rng), noise(rng));
+      const Point3 x = nurbs::evaluate(truth.surface, u, v) + simulation::draw_vector(noise, rng);
       const nurbs::ClosestPointResult foot = on_start.closest_point(x);
       points.push_back(x);
       params.push_back({foot.u, foot.v});

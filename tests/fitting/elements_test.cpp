@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "probecomp/selftest/reference_elements.hpp"
+#include "probecomp/simulation/random.hpp"
 
 namespace probecomp::fitting {
 namespace {
@@ -28,7 +29,8 @@ TEST(ElementFits, ExactDataGiveTheElement) {
     const double phi = 2.0 * std::numbers::pi * t(rng), z = 2.0 * t(rng) - 1.0, rho = std::sqrt(1 - z * z);
     sphere.push_back(c + 7.0 * (rho * std::cos(phi) * s + rho * std::sin(phi) * q + z * a));
     cylinder.push_back(c + 30.0 * t(rng) * a + 4.0 * (std::cos(phi) * s + std::sin(phi) * q));
-    plane.push_back(c + 50.0 * t(rng) * s + 20.0 * t(rng) * q);
+    const double along_q = t(rng), along_s = t(rng);  // as gcc drew them in one expression, last term first
+    plane.push_back(c + 50.0 * along_s * s + 20.0 * along_q * q);
   }
   const SphereFit fs = fit_sphere(sphere);
   ASSERT_EQ(fs.status, ElementFitStatus::OK);
@@ -117,8 +119,10 @@ TEST(ElementFits, NoSmallChangeOfTheFittedCylinderLowersTheSumOfSquares) {
   std::vector<Point3> x;
   for (int k = 0; k < 80; ++k) {
     const double phi = 1.745 * t(rng);
-    x.push_back(c + 25.0 * t(rng) * a + (15.0 + noise(rng)) * (std::cos(phi) * s + std::sin(phi) * q) +
-                Vector3(noise(rng), noise(rng), noise(rng)));
+    // Drawn in the order gcc drew them in one expression, last term first.
+    const Vector3 e = simulation::draw_vector(noise, rng);
+    const double radius = 15.0 + noise(rng), along = 25.0 * t(rng);
+    x.push_back(c + along * a + radius * (std::cos(phi) * s + std::sin(phi) * q) + e);
   }
   const CylinderFit f = fit_cylinder(x);
   ASSERT_EQ(f.status, ElementFitStatus::OK);

@@ -32,7 +32,10 @@ Field make_field(Sampling sampling, int n, double sigma, unsigned seed, Misfit m
       for (int j = 0; j < ny; ++j) xy.emplace_back(100.0 * (i + 0.5) / nx, 60.0 * (j + 0.5) / ny);
     }
   } else if (sampling == Sampling::Random) {
-    for (int k = 0; k < n; ++k) xy.emplace_back(100.0 * unit(rng), 60.0 * unit(rng));
+    for (int k = 0; k < n; ++k) {
+      const double y = unit(rng), x = unit(rng);  // as gcc drew them as the call's arguments
+      xy.emplace_back(100.0 * x, 60.0 * y);
+    }
   } else {
     const int lines = 15, along = n / lines;  // lines 4 mm apart, points 0.1–0.2 mm apart along them
     for (int l = 0; l < lines; ++l) {

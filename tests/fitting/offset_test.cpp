@@ -28,7 +28,10 @@ std::vector<std::pair<double, double>> random_parameters(const Surface& s, int n
   const nurbs::Domain d = s.domain();
   std::uniform_real_distribution<double> u(d.u0, d.u1), v(d.v0, d.v1);
   std::vector<std::pair<double, double>> out;
-  for (int k = 0; k < n; ++k) out.emplace_back(u(rng), v(rng));
+  for (int k = 0; k < n; ++k) {
+    const double b = v(rng), a = u(rng);  // as gcc drew them as the call's arguments
+    out.emplace_back(a, b);
+  }
   return out;
 }
 

@@ -1,6 +1,7 @@
 // nearest_others and first_at_same_position against lists worked out by hand.
 
 #include "probecomp/geometry/neighbours.hpp"
+#include "probecomp/simulation/random.hpp"
 
 #include <gtest/gtest.h>
 
@@ -62,7 +63,7 @@ TEST(FirstAtSamePosition, NamesEachGroupByItsFirstPoint) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> x(-50.0, 50.0);
   std::vector<Point3> p;
-  for (int k = 0; k < 3000; ++k) p.emplace_back(x(rng), x(rng), 0.01 * x(rng));
+  for (int k = 0; k < 3000; ++k) p.push_back(simulation::draw_vector(x, rng).cwiseProduct(Vector3(1.0, 1.0, 0.01)));
   for (int k = 0; k < 300; ++k) p.push_back(p[static_cast<std::size_t>(k * 7)]);
   for (int k = 0; k < 50; ++k) p.push_back(p[static_cast<std::size_t>(k * 11)] + Point3(5e-10, 0, 0));
   p.push_back({nan, 0, 0});
@@ -89,7 +90,10 @@ void expect_brute_force_neighbours(int points, const std::vector<double>& cuts, 
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> x(-100.0, 100.0), y(-40.0, 40.0), z(-1.0, 1.0);
   std::vector<Point3> p;
-  for (int k = 0; k < points; ++k) p.emplace_back(x(rng), y(rng), z(rng));
+  for (int k = 0; k < points; ++k) {
+    const double pz = z(rng), py = y(rng), px = x(rng);  // as gcc drew them as the call's arguments
+    p.emplace_back(px, py, pz);
+  }
   // Repeats of points next to the cuts, some of them on the other side of one.
   std::vector<std::size_t> near_cut;
   for (std::size_t k = 0; k < p.size(); ++k) {

@@ -1,6 +1,7 @@
 // Rigid-motion helpers against closed forms.
 
 #include "probecomp/geometry/rigid.hpp"
+#include "probecomp/simulation/random.hpp"
 
 #include <gtest/gtest.h>
 
@@ -23,7 +24,7 @@ TEST(Rigid, PoseRoundTrips) {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> a(-170.0, 170.0), b(-85.0, 85.0), t(-100.0, 100.0);
   for (int k = 0; k < 1000; ++k) {
-    const Pose p{.rx = a(rng), .ry = b(rng), .rz = a(rng), .t = Vector3(t(rng), t(rng), t(rng))};
+    const Pose p{.rx = a(rng), .ry = b(rng), .rz = a(rng), .t = simulation::draw_vector(t, rng)};
     const Pose q = to_pose(from_pose(p));
     EXPECT_NEAR(q.rx, p.rx, 1e-11);
     EXPECT_NEAR(q.ry, p.ry, 1e-11);
@@ -54,7 +55,7 @@ TEST(Rigid, LargestMotionBoundsEveryPointAndIsReached) {
   std::normal_distribution<double> g(0.0, 1.0);
   double worst = 0.0;
   for (int k = 0; k < 20000; ++k) {
-    const Point3 p = c + 50.0 * Vector3(g(rng), g(rng), g(rng)).normalized();
+    const Point3 p = c + 50.0 * simulation::draw_vector(g, rng).normalized();
     worst = std::max(worst, (T * p - p).norm());
   }
   EXPECT_LE(worst, bound * (1 + 1e-12));

@@ -40,7 +40,8 @@ TEST(ClosestPoint, PlaneOutsideIsTheClampedProjectionOnAnEdgeOrCorner) {
   std::uniform_real_distribution<double> x(-10.0, 30.0), y(-10.0, 20.0), z(-3.0, 3.0);
   int on_edges = 0;
   for (int k = 0; k < 2000; ++k) {
-    const Point3 q(x(rng), y(rng), z(rng));
+    const double qz = z(rng), qy = y(rng), qx = x(rng);  // as gcc drew them as the constructor's arguments
+    const Point3 q(qx, qy, qz);
     const Point3 expected(std::clamp(q.x(), 0.0, 20.0), std::clamp(q.y(), 0.0, 10.0), 0.0);
     const ClosestPointResult r = solver.closest_point(q);
     const bool outside = q.x() < 0 || q.x() > 20 || q.y() < 0 || q.y() > 10;

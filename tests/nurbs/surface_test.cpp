@@ -88,7 +88,10 @@ TEST(Surface, BicubicDerivativesAreTheSameBitForBitWithAndWithoutAvx) {
     ASSERT_EQ(s.p(), 3);
     ASSERT_EQ(s.q(), 3);
     std::vector<std::pair<double, double>> at;
-    for (int k = 0; k < 300; ++k) at.emplace_back(t(rng), t(rng));
+    for (int k = 0; k < 300; ++k) {
+      const double v = t(rng), u = t(rng);  // as gcc drew them as the call's arguments
+      at.emplace_back(u, v);
+    }
     for (double u : s.U().breakpoints())
       for (double v : s.V().breakpoints()) at.emplace_back(u, v);
     for (const auto& [u, v] : at) {

@@ -1,6 +1,7 @@
 // Degrees of freedom of point-to-plane alignment for shapes whose symmetries are known.
 
 #include "probecomp/registration/constraints.hpp"
+#include "probecomp/simulation/random.hpp"
 
 #include <gtest/gtest.h>
 
@@ -33,7 +34,7 @@ TEST(Constraints, SphereLeavesThreeRotationsAboutItsCentre) {
   std::vector<Point3> x;
   std::vector<Vector3> n;
   for (int k = 0; k < 500; ++k) {
-    Vector3 d(g(rng), g(rng), g(rng));
+    Vector3 d = simulation::draw_vector(g, rng);
     d.normalize();
     if (d.z() < 0.2) continue;  // a cap, so the centroid is not the sphere's centre
     x.push_back(centre + 12.0 * d);

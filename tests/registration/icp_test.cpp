@@ -9,6 +9,7 @@
 #include <random>
 
 #include "probecomp/nurbs/constructors.hpp"
+#include "probecomp/simulation/random.hpp"
 #include "registration/support.hpp"
 #include "support/test_surfaces.hpp"
 
@@ -61,7 +62,7 @@ NoisyCase noisy_case(const nurbs::Surface& s, double sigma, int n = 10000, doubl
   for (int k = 0; k < n; ++k) {
     const double u = t(rng), v = t(rng);
     const Point3 p = nurbs::evaluate(s, u, v);
-    Point3 q = p + Vector3(g(rng), g(rng), g(rng));
+    Point3 q = p + simulation::draw_vector(g, rng);
     const bool out = pick(rng) < 0.01;
     if (out) q += gross(rng) * nurbs::unit_normal(s, u, v).n;
     c.nominal.push_back(p);

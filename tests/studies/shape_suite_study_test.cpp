@@ -12,6 +12,7 @@
 
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/error.hpp"
+#include "probecomp/simulation/random.hpp"
 #include "support/light.hpp"
 
 namespace probecomp::studies {
@@ -89,7 +90,7 @@ TEST(ShapeSuite, TheMaterialSideWithoutApproachNormalsDoesNotFlipWithThePose) {
         c.rx = angle(rng);
         c.ry = angle(rng);
         c.rz = angle(rng);
-        c.t = Vector3(shift(rng), shift(rng), shift(rng));
+        c.t = simulation::draw_vector(shift, rng);
         c.seed = static_cast<std::uint64_t>(10 + runs);
         ++runs;
         const char* what = simulation::to_string(base);

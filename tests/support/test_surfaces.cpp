@@ -5,6 +5,8 @@
 #include <numbers>
 #include <random>
 
+#include "probecomp/simulation/random.hpp"
+
 namespace probecomp::testing {
 
 namespace {
@@ -114,7 +116,7 @@ nurbs::Surface perturbed(const nurbs::Surface& s, double amount, std::uint64_t s
   std::vector<double> w;
   for (int i = 0; i < s.num_u(); ++i) {
     for (int j = 0; j < s.num_v(); ++j) {
-      P.push_back(s.control_point(i, j) + Vector3(d(rng), d(rng), d(rng)));
+      P.push_back(s.control_point(i, j) + simulation::draw_vector(d, rng));
       w.push_back(s.weight(i, j));
     }
   }
@@ -135,7 +137,7 @@ SurfaceSamples sample_surface(const nurbs::Surface& s, std::size_t n, double sig
       if (noise == Noise::AlongNormal) {
         x += gauss(rng) * nurbs::unit_normal(s, t.u, t.v).n;
       } else {
-        x += Vector3(gauss(rng), gauss(rng), gauss(rng));
+        x += simulation::draw_vector(gauss, rng);
       }
     }
     out.points.push_back(x);
