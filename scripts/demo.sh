@@ -5,7 +5,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+source scripts/release_build.sh
+configure_release_build
 cmake --build build -j"$(nproc)"
 ./build/probecomp --version
 ./build/probecomp demo --output-dir build/demo "$@"

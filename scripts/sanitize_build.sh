@@ -1,5 +1,5 @@
 # Sourced by scripts/test.sh --sanitize and scripts/fuzz.sh: the one instrumented build, build-sanitize/, and the
-# sanitizers' settings. clang, AddressSanitizer and UndefinedBehaviorSanitizer at -O1, and the fuzz targets
+# sanitizers' settings. clang, AddressSanitizer and UndefinedBehaviorSanitizer at -O2 (CMakeLists.txt), and the fuzz targets
 # (-DPROBECOMP_FUZZ=ON: libFuzzer's coverage in the readers' layers): the tests and the fuzz targets link the same
 # instrumented library, compiled once (CI within 30 minutes; clang also compiled our template-heavy files in two
 # thirds of gcc's time). No Python package: the

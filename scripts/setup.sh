@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages probecomp builds against, only those that are missing; with --tests also what the
-# tests need beyond the build (a browser for the HTML report, Python for its checker); with --fuzz the compiler of
-# the sanitizer build and its fuzz targets (clang with its libFuzzer runtime).
+# tests need beyond the build (a browser for the HTML report, Python for its checker); with --fuzz the libFuzzer
+# runtime of the sanitizer build's fuzz targets.
 # Safe to run repeatedly: when everything is present it does nothing and needs no network.
 set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
+  clang                         # the compiler the scripts build with (scripts/release_build.sh)
   libeigen3-dev                 # linear algebra
   libocct-foundation-dev        # OpenCASCADE: TKernel, TKMath
   libocct-modeling-data-dev     # OpenCASCADE: Geom_BSplineSurface, BRep
@@ -33,7 +34,7 @@ if [ "${1:-}" = "--tests" ]; then
   )
 fi
 if [ "${1:-}" = "--fuzz" ]; then
-  packages+=(clang libclang-rt-dev) # -fsanitize=fuzzer: its runtime is only recommended by clang, so named
+  packages+=(libclang-rt-dev)   # -fsanitize=fuzzer: its runtime is only recommended by clang, so named
 fi
 
 missing=()
