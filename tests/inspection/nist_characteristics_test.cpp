@@ -7,8 +7,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <map>
 #include <optional>
@@ -41,10 +43,15 @@ std::vector<simulation::ProgrammedPoint> sparse_plan(const cad::Model& model, co
   return plan;
 }
 
-// Returns how many characteristics were evaluated; each not evaluated must be for a datum the file does not tie to
-// faces.
-// `aligned_bound`: the largest |deviation − move| of a trusted row with the output aligned to the first complete frame.
-int judge_as_moved(const std::filesystem::path& file, double aligned_bound = 0.010) {
+// Of one simulated measurement: how many characteristics were evaluated (each not evaluated must be for a datum the
+// file does not tie to faces), and with the output aligned to the first complete frame, the largest |deviation − move|
+// of a trusted row, mm, and in its u (the frame's share included).
+struct Judged {
+  int evaluated = 0;
+  double worst = 0.0, worst_in_u = 0.0;
+};
+
+Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7) {
   const cad::Model nominal = cad::read_model(file);
   const cad::Pmi pmi = cad::read_pmi(file, nominal);
   int skipped = 0;
@@ -118,7 +125,7 @@ int judge_as_moved(const std::filesystem::path& file, double aligned_bound = 0.0
     p.normal = placement.linear() * p.normal;
   }
   const std::vector<simulation::Touch> touches =
-      simulation::simulate_touches(cad::ModelLocator(placed), followed, {.probe_radius = 1.0, .noise_sigma = 0.002, .seed = 7});
+      simulation::simulate_touches(cad::ModelLocator(placed), followed, {.probe_radius = 1.0, .noise_sigma = 0.002, .seed = seed});
   std::vector<Point3> centres;
   std::vector<Vector3> normals;
   for (std::size_t i = 0; i < touches.size(); ++i) {
@@ -132,7 +139,7 @@ int judge_as_moved(const std::filesystem::path& file, double aligned_bound = 0.0
   const Inspection judged = evaluate(spec, nominal, result);
   std::printf("%zu touches on %zu faces, %zu characteristics, %zu datums fitted\n", centres.size(), measured.size(),
               judged.characteristics.size(), judged.datums.size());
-  int evaluated = 0;
+  Judged out;
   for (const CharacteristicResult& c : judged.characteristics) {
     const std::optional<double> known = truth.at(c.spec.name);
     const double t = known.value_or(NAN);
@@ -144,7 +151,7 @@ int judge_as_moved(const std::filesystem::path& file, double aligned_bound = 0.0
       EXPECT_NE(c.reason.find("could not be read from the file"), std::string::npos) << c.spec.name << ": " << c.reason;
       continue;
     }
-    ++evaluated;
+    ++out.evaluated;
     if (!known) continue;
     EXPECT_NEAR(c.min, t, 0.010) << c.spec.name;
     EXPECT_NEAR(c.max, t, 0.010) << c.spec.name;
@@ -161,38 +168,57 @@ int judge_as_moved(const std::filesystem::path& file, double aligned_bound = 0.0
         if (d.name == name) order.push_back(d);
       }
     }
-    const compensation::CompensationResult out = aligned(result, establish_frame(order, nominal, result), nominal);
-    double worst = 0.0, worst_in_u = 0.0;
+    const compensation::CompensationResult in_frame = aligned(result, establish_frame(order, nominal, result), nominal);
     int rows = 0;
-    for (const compensation::CompensatedPoint& p : out.points) {
+    for (const compensation::CompensatedPoint& p : in_frame.points) {
       if (p.status != compensation::PointStatus::Ok) continue;
       const double move = moved.contains(p.face) ? moved.at(p.face) : 0.0;
-      worst = std::max(worst, std::abs(p.deviation - move));
-      worst_in_u = std::max(worst_in_u, std::abs(p.deviation - move) / p.uncertainty);
+      out.worst = std::max(out.worst, std::abs(p.deviation - move));
+      out.worst_in_u = std::max(out.worst_in_u, std::abs(p.deviation - move) / p.uncertainty);
       ++rows;
     }
-    std::printf("aligned to %s (%s): %d trusted rows, largest |deviation - move| %.4f mm, %.2f u\n", c.name.c_str(),
-                c.datums.empty() ? "" : c.datums.front().c_str(), rows, worst, worst_in_u);
-    EXPECT_LT(worst, aligned_bound);
+    std::printf("seed %llu, aligned to %s (%s): %d trusted rows, largest |deviation - move| %.4f mm, %.2f u\n",
+                static_cast<unsigned long long>(seed), c.name.c_str(), c.datums.empty() ? "" : c.datums.front().c_str(),
+                rows, out.worst, out.worst_in_u);
+    EXPECT_GT(rows, 0);
     break;
   }
-  return evaluated;
+  return out;
 }
 
 TEST(NistCharacteristics, StcSixsProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay) {
-  EXPECT_GT(judge_as_moved(test::kCadDir / "nist_stc_06_asme1_ap242-e3.stp"), 0);
+  const Judged j = judge_as_moved(test::kCadDir / "nist_stc_06_asme1_ap242-e3.stp");
+  EXPECT_GT(j.evaluated, 0);
+  EXPECT_LT(j.worst, 0.010);
 }
 
+// Aligned to D|G|H, the rows far from the secondary datum G carry its error: G (face 316) is a plane 134 × 31 mm
+// with 36 touches, which at σ = 2 µm fix the frame's turn about z to a standard deviation of 7–8e-6 rad (the frame
+// states it), 4–5 µm on hole B's rows at the far end. How the frame's fit turns the part is how a plane fitted to G's
+// raw centres is turned: seed 1 draws a 3.5 σ tilt there (2.98e-5 rad; the frame 2.84e-5), and those rows come out
+// 20.5 µm off, 4.35 times their u with the frame's share. Over seeds 1–8 the largest |deviation − move| had a median
+// of 6.6 µm. The 10 µm is what the typical draw gives; no fit of these points can promise it on every draw,
+// and u says so: every row within 5 u.
 TEST(NistCharacteristics, CtcFoursProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay) {
   if (test::kLight) GTEST_SKIP() << "the sanitizer build runs STC-06's, through the same code";
-  // Not the 10 µm yet: aligned to D|G|H (planes whose sparse touches are fitted as such), the rows on the far
-  // hole B are up to 11.3 µm off, 3.2 times their u with the frame's share: the frame is turned 1.5e-5 rad, and the
-  // datums' own u says less (the next step). In A|B|C, B's own fit leaves 1.7 µm rms.
-  EXPECT_GT(judge_as_moved(test::kCadDir / "nist_ctc_04_asme1_ap242-e1.stp", 0.012), 0);
+  std::vector<double> worst;
+  for (const std::uint64_t seed : {1u, 2u, 3u, 4u}) {
+    SCOPED_TRACE(seed);
+    const Judged j = judge_as_moved(test::kCadDir / "nist_ctc_04_asme1_ap242-e1.stp", seed);
+    EXPECT_GT(j.evaluated, 0);
+    EXPECT_LT(j.worst_in_u, 5.0);
+    worst.push_back(j.worst);
+  }
+  std::nth_element(worst.begin(), worst.begin() + 1, worst.end());
+  const double lower = worst[1];
+  const double upper = *std::min_element(worst.begin() + 2, worst.end());
+  EXPECT_LT(0.5 * (lower + upper), 0.010) << "the median over the seeds";
 }
 
 TEST(NistCharacteristics, FtcSixsProfilesOnItsUnreadDatumsSaySo) {
-  EXPECT_GT(judge_as_moved(test::kCadDir / "nist_ftc_06_asme1_ap242-e2.stp"), 0);
+  const Judged j = judge_as_moved(test::kCadDir / "nist_ftc_06_asme1_ap242-e2.stp");
+  EXPECT_GT(j.evaluated, 0);
+  EXPECT_LT(j.worst, 0.010);
 }
 
 }  // namespace
