@@ -68,6 +68,8 @@
 
 namespace probecomp::cad {
 
+using detail::fail;
+
 namespace {
 
 // Boundary polygons follow their pcurves to this fraction of the face's parameter range: on a 100 mm face
@@ -81,10 +83,6 @@ enum class Format { Step, Iges };
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
-}
-
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& cause) {
-  throw CadError(path.string() + ": " + cause);
 }
 
 Format format_of(const std::filesystem::path& path) {
@@ -431,6 +429,8 @@ std::mutex& exchange_mutex() {
   static std::mutex m;
   return m;
 }
+
+void fail(const std::filesystem::path& path, const std::string& cause) { throw CadError(path.string() + ": " + cause); }
 
 void configure_exchange() {
   static std::once_flag once;

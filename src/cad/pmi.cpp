@@ -48,9 +48,7 @@ namespace probecomp::cad {
 
 namespace {
 
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& why) {
-  throw CadError(path.string() + ": " + why);
-}
+using detail::fail;
 
 ToleranceType type_of(XCAFDimTolObjects_GeomToleranceType t) {
   switch (t) {
