@@ -40,7 +40,34 @@ Fitted as_element(cad::ElementaryKind kind, fitting::ElementFitStatus status, co
   return out;
 }
 
-Fitted fit_kind(cad::ElementaryKind kind, std::span<const Point3> pts) {
+fitting::ConeFit as_cone(const ElementFaceFit& e) {
+  return {.status = fitting::ElementFitStatus::OK, .axis_point = e.point, .axis = e.axis, .radius = e.radius,
+          .half_angle = e.half_angle};
+}
+
+fitting::TorusFit as_torus(const ElementFaceFit& e) {
+  return {.status = fitting::ElementFitStatus::OK, .center = e.point, .axis = e.axis, .radius = e.radius,
+          .minor_radius = e.minor_radius};
+}
+
+// The surface the face's tip centres lie on when the part is as its nominal: the face offset by r along its outward
+// normal, in the machine frame. The start of a cone's or torus's fit, and what every fit is checked against.
+std::optional<ElementFaceFit> centres_element(const cad::Face& face, const geometry::RigidTransform& to_machine,
+                                              double r) {
+  const std::optional<cad::ElementarySurface> offset = face.analytic->offset_surface(face.outward * r);
+  if (!offset) return std::nullopt;  // a hole or fillet tighter than the tip
+  const cad::ElementarySurface& s = *offset;
+  ElementFaceFit e;
+  e.kind = s.kind;
+  e.point = to_machine * s.origin;
+  e.axis = to_machine.linear() * s.z;
+  e.radius = s.radius;
+  e.half_angle = s.half_angle;
+  e.minor_radius = s.minor_radius;
+  return e;
+}
+
+Fitted fit_kind(cad::ElementaryKind kind, std::span<const Point3> pts, const ElementFaceFit& start) {
   Fitted out;
   if (kind == cad::ElementaryKind::Plane) {
     const fitting::PlaneFit f = fitting::fit_plane(pts);
@@ -51,6 +78,14 @@ Fitted fit_kind(cad::ElementaryKind kind, std::span<const Point3> pts) {
   } else if (kind == cad::ElementaryKind::Sphere) {
     const fitting::SphereFit f = fitting::fit_sphere(pts);
     out = as_element(kind, f.status, f.center, Vector3::Zero(), f.radius, f.rms, 4, pts.size());
+  } else if (kind == cad::ElementaryKind::Cone) {
+    const fitting::ConeFit f = fitting::fit_cone(pts, as_cone(start));
+    out = as_element(kind, f.status, f.axis_point, f.axis, f.radius, f.rms, 6, pts.size());
+    out.e.half_angle = f.half_angle;
+  } else if (kind == cad::ElementaryKind::Torus) {
+    const fitting::TorusFit f = fitting::fit_torus(pts, as_torus(start));
+    out = as_element(kind, f.status, f.center, f.axis, f.radius, f.rms, 7, pts.size());
+    out.e.minor_radius = f.minor_radius;
   }
   // At least one degree of freedom more than the element has: else the fit passes through the points and says
   // nothing of the noise.
@@ -58,22 +93,24 @@ Fitted fit_kind(cad::ElementaryKind kind, std::span<const Point3> pts) {
   return out;
 }
 
-// Whether the fitted element is the nominal one offset by r (machine frame): see kMaxElementTilt.
-bool like_nominal(const ElementFaceFit& e, const cad::Face& face, const geometry::RigidTransform& to_machine, double r,
-                  const Point3& some_centre) {
-  const cad::ElementarySurface& nominal = face.analytic->surface();
-  const Vector3 axis = to_machine.linear() * nominal.z;
-  if (e.kind != cad::ElementaryKind::Sphere && std::abs(e.axis.dot(axis)) < std::cos(kMaxElementTilt)) return false;
-  if (e.kind == cad::ElementaryKind::Plane) return true;
-  // Convex (a pin, a ball) where the outward normal points away from the axis or centre: centres at R + r.
-  const Point3 x = to_machine.inverse() * some_centre;
-  const nurbs::ClosestPointResult foot = face.analytic->closest_point(x);
-  const Vector3 n = static_cast<double>(face.outward) * foot.Su.cross(foot.Sv);
-  Vector3 radial = x - nominal.origin;
-  if (e.kind == cad::ElementaryKind::Cylinder) radial -= radial.dot(nominal.z) * nominal.z;
-  const bool convex = n.dot(radial) > 0.0;
-  const double expected = nominal.radius + (convex ? r : -r);
-  return expected > 0.0 && std::abs(e.radius - expected) <= kMaxRadiusChange;
+// Whether the fitted element is the nominal one offset by r (`nominal`, centres_element): see kMaxElementTilt.
+bool like_nominal(const ElementFaceFit& e, const ElementFaceFit& nominal) {
+  if (e.kind != cad::ElementaryKind::Sphere && std::abs(e.axis.dot(nominal.axis)) < std::cos(kMaxElementTilt)) {
+    return false;
+  }
+  switch (e.kind) {
+    case cad::ElementaryKind::Plane: return true;
+    case cad::ElementaryKind::Cone: {
+      // The nominal's radius at the height of the fitted cone's axis point.
+      const double h = (e.point - nominal.point).dot(nominal.axis);
+      return std::abs(e.half_angle - nominal.half_angle) <= kMaxElementTilt &&
+             std::abs(e.radius - (nominal.radius + h * std::tan(nominal.half_angle))) <= kMaxRadiusChange;
+    }
+    case cad::ElementaryKind::Torus:
+      return std::abs(e.radius - nominal.radius) <= kMaxRadiusChange &&
+             std::abs(e.minor_radius - nominal.minor_radius) <= kMaxRadiusChange;
+    default: return std::abs(e.radius - nominal.radius) <= kMaxRadiusChange;  // cylinder, sphere
+  }
 }
 
 }  // namespace
@@ -83,12 +120,11 @@ std::optional<ElementFaceFit> fit_element_face(const cad::Face& face, std::span<
                                                std::vector<char>& outlier) {
   if (!face.analytic || centres.empty()) return std::nullopt;
   const cad::ElementaryKind kind = face.analytic->surface().kind;
-  if (kind != cad::ElementaryKind::Plane && kind != cad::ElementaryKind::Cylinder && kind != cad::ElementaryKind::Sphere) {
-    return std::nullopt;
-  }
+  const std::optional<ElementFaceFit> nominal = centres_element(face, to_machine, r);
+  if (!nominal) return std::nullopt;
   outlier.assign(centres.size(), 0);
-  Fitted all = fit_kind(kind, centres);
-  if (!all.ok || !like_nominal(all.e, face, to_machine, r, centres[0])) {
+  Fitted all = fit_kind(kind, centres, *nominal);
+  if (!all.ok || !like_nominal(all.e, *nominal)) {
     outlier.assign(centres.size(), 0);
     return std::nullopt;
   }
@@ -102,8 +138,8 @@ std::optional<ElementFaceFit> fit_element_face(const cad::Face& face, std::span<
     if (!outlier[k]) kept.push_back(centres[k]);
   }
   if (kept.size() == centres.size()) return all.e;
-  Fitted again = fit_kind(kind, kept);
-  if (!again.ok || !like_nominal(again.e, face, to_machine, r, kept[0])) {
+  Fitted again = fit_kind(kind, kept, all.e);
+  if (!again.ok || !like_nominal(again.e, *nominal)) {
     outlier.assign(centres.size(), 0);
     return all.e;
   }
@@ -118,6 +154,8 @@ double element_distance(const ElementFaceFit& e, const Point3& x) {
       return (d - d.dot(e.axis) * e.axis).norm() - e.radius;
     }
     case cad::ElementaryKind::Sphere: return (x - e.point).norm() - e.radius;
+    case cad::ElementaryKind::Cone: return fitting::distance(as_cone(e), x);
+    case cad::ElementaryKind::Torus: return fitting::distance(as_torus(e), x);
     default: return 0.0;
   }
 }
@@ -129,6 +167,17 @@ Vector3 element_normal(const ElementFaceFit& e, const Point3& x, const Vector3& 
     n = d - d.dot(e.axis) * e.axis;
   } else if (e.kind == cad::ElementaryKind::Sphere) {
     n = x - e.point;
+  } else if (e.kind == cad::ElementaryKind::Cone || e.kind == cad::ElementaryKind::Torus) {
+    const Vector3 d = x - e.point;
+    const double h = d.dot(e.axis);
+    const Vector3 radial = (d - h * e.axis).normalized();
+    // The cone's distance (ρ − r − h tan α) cos α grows along cos α ρ̂ − sin α a; the torus's away from the tube's
+    // centre circle.
+    if (e.kind == cad::ElementaryKind::Cone) {
+      n = std::cos(e.half_angle) * radial - std::sin(e.half_angle) * e.axis;
+    } else {
+      n = x - (e.point + e.radius * radial);
+    }
   }
   if (!(n.norm() > 0.0)) return towards.normalized();
   n.normalize();

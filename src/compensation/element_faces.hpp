@@ -1,6 +1,6 @@
 #pragma once
 // Faces too sparse for their NURBS net (10–40 touches on a plane or a hole, the usual way a CMM measures a prismatic
-// face), fitted as the plane, cylinder or sphere the CAD file says they are. Private to compensation/.
+// face), fitted as the plane, cylinder, sphere, cone or torus the CAD file says they are. Private to compensation/.
 
 #include <optional>
 #include <span>
@@ -14,16 +14,17 @@ namespace probecomp::compensation::detail {
 
 // The face's element fitted to its tip centres (machine frame, as the faces' NURBS fits; `to_machine` the
 // registration), with points beyond kElementOutlierScales robust scales of the fit's residuals left out (`outlier`,
-// per centre, set to 1) and the element fitted again. Nothing where the face is not a plane, cylinder or sphere,
-// the centres do not fix the element (too few, all on a line), or the element is not the nominal's offset by the
-// tip radius `r` to within kMaxElementTilt and kMaxRadiusChange (a hole narrower than the tip, a fit that found
-// another shape in a few points): those points stay offset along the nominal normal.
+// per centre, set to 1) and the element fitted again. A cone or torus starts from the nominal's offset. Nothing
+// where the face is not an elementary surface, the centres do not fix the element (too few, all on a line, a band
+// too narrow for a cone's angle), or the element is not the nominal's offset by the tip radius `r` to within
+// kMaxElementTilt and kMaxRadiusChange (a hole narrower than the tip, a fit that found another shape in a few
+// points): those points stay offset along the nominal normal.
 [[nodiscard]] std::optional<ElementFaceFit> fit_element_face(const cad::Face& face, std::span<const Point3> centres,
                                                              const geometry::RigidTransform& to_machine, double r,
                                                              std::vector<char>& outlier);
 
-// The signed distance of x from the element, mm (plane: along its normal as fitted; cylinder, sphere: positive
-// outside their radius).
+// The signed distance of x from the element, mm (plane: along its normal as fitted; the others: positive away from
+// the axis, centre or tube's centre circle).
 [[nodiscard]] double element_distance(const ElementFaceFit& e, const Point3& x);
 
 // The element's unit normal at (or nearest) x, pointing as `towards` does (the side the tip was on).

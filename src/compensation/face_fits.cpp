@@ -315,7 +315,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
         const std::string too_few = std::to_string(pts.size()) + " points off the edges for " +
                                     std::to_string(start.num_u() * start.num_v()) + " control points (" + mm(needed) +
                                     " needed)";
-        // Too few for the NURBS, but a plane, cylinder or sphere is fixed by a handful: fitted as that, its points
+        // Too few for the NURBS, but an elementary surface is fixed by a handful: fitted as that, its points
         // offset along its normal (contact_points.cpp), not the nominal's.
         std::vector<char> left_out;
         ff.element = detail::fit_element_face(face, pts, registration.transform, prepared.radii.smallest(), left_out);

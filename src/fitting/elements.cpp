@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <vector>
 
@@ -144,6 +145,105 @@ CylinderFit cylinder_from(const Centred& c, Vector3 axis, Point3 through, double
   return f;
 }
 
+// The cone's parametrisation follows the cylinder's: in a frame where the current axis is z through `through`, the
+// axis is (x0, y0, 0) + t(a, b, 1), and with ρ = √(x² + y²), h = z, the distance of (x, y, z) from the cone of
+// radius r at the origin and half-angle α is (ρ − r − h tan α) cos α = ρ cos α − h sin α − r cos α. At
+// a = b = x0 = y0 = 0, ρ moves as for the cylinder and h by (x, y) per (a, b), so its derivatives in
+// (x0, y0, a, b, r, α) are (−c x/ρ, −c y/ρ, −c xz/ρ − s x, −c yz/ρ − s y, −c, −(ρ − r) s − h c), c = cos α, s = sin α.
+// After each step `through` goes back to the axis point nearest the centroid, r with it.
+ConeFit cone_from(const Centred& c, Vector3 axis, Point3 through, double radius, double half_angle) {
+  ConeFit f;
+  const Eigen::Index n = static_cast<Eigen::Index>(c.p.size());
+  Eigen::Matrix3d R;
+  const auto linearise = [&](Eigen::MatrixXd& J, Eigen::VectorXd& d) {
+    R = to_z(axis);
+    const double cs = std::cos(half_angle), sn = std::sin(half_angle);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Vector3 q = R * (c.p[static_cast<std::size_t>(i)] - through);
+      const double rho = std::hypot(q.x(), q.y());
+      if (!(rho > 0.0)) return false;
+      d(i) = (rho - radius - q.z() * std::tan(half_angle)) * cs;
+      J.row(i) << -cs * q.x() / rho, -cs * q.y() / rho, -cs * q.x() * q.z() / rho - sn * q.x(),
+          -cs * q.y() * q.z() / rho - sn * q.y(), -cs, -(rho - radius) * sn - q.z() * cs;
+    }
+    return true;
+  };
+  const auto recentre = [&] {
+    const double shift = -through.dot(axis);
+    through += shift * axis;
+    radius += shift * std::tan(half_angle);
+  };
+  const auto update = [&](const Eigen::VectorXd& step) {
+    const Eigen::Matrix3d back = R.transpose();
+    through += back * Vector3(step(0), step(1), 0.0);
+    axis = (back * Vector3(step(2), step(3), 1.0)).normalized();
+    radius += step(4);
+    half_angle += step(5);
+    recentre();
+    return std::max({std::abs(step(0)), std::abs(step(1)), std::abs(step(4)), c.size * std::abs(step(2)),
+                     c.size * std::abs(step(3)), c.size * std::abs(step(5))});
+  };
+  recentre();
+  f.status = gauss_newton(n, 6, c.size, f.iterations, linearise, update);
+  if (f.status == ElementFitStatus::Degenerate || !(std::abs(half_angle) < 0.5 * std::numbers::pi)) {
+    f.status = ElementFitStatus::Degenerate;
+    return f;
+  }
+  f.axis_point = c.centroid + through;
+  f.axis = axis;
+  f.radius = radius;
+  f.half_angle = half_angle;
+  Eigen::VectorXd d(n);
+  for (Eigen::Index i = 0; i < n; ++i) d(i) = distance(f, c.centroid + c.p[static_cast<std::size_t>(i)]);
+  f.rms = rms_of(d);
+  return f;
+}
+
+// The torus about the axis z through `centre` (free in x0, y0, z0; the axis tilted by (a, b) as the cylinder's):
+// with ρ = √(x² + y²), h = z and w = √((ρ − R)² + h²), the distance is w − r; its derivatives in
+// (x0, y0, z0, a, b, R, r) follow from ∂w/∂ρ = (ρ − R)/w, ∂w/∂h = h/w and ρ's and h's as for the cone.
+TorusFit torus_from(const Centred& c, Vector3 axis, Point3 centre_estimate, double radius, double minor) {
+  TorusFit f;
+  const Eigen::Index n = static_cast<Eigen::Index>(c.p.size());
+  Eigen::Matrix3d R;
+  const auto linearise = [&](Eigen::MatrixXd& J, Eigen::VectorXd& d) {
+    R = to_z(axis);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Vector3 q = R * (c.p[static_cast<std::size_t>(i)] - centre_estimate);
+      const double rho = std::hypot(q.x(), q.y());
+      const double w = std::hypot(rho - radius, q.z());
+      if (!(rho > 0.0) || !(w > 0.0)) return false;  // on the axis, or on the tube's centre circle
+      const double dr = (rho - radius) / w, dh = q.z() / w;
+      d(i) = w - minor;
+      J.row(i) << -dr * q.x() / rho, -dr * q.y() / rho, -dh, -dr * q.x() * q.z() / rho + dh * q.x(),
+          -dr * q.y() * q.z() / rho + dh * q.y(), -dr, -1.0;
+    }
+    return true;
+  };
+  const auto update = [&](const Eigen::VectorXd& step) {
+    const Eigen::Matrix3d back = R.transpose();
+    centre_estimate += back * step.head<3>();
+    axis = (back * Vector3(step(3), step(4), 1.0)).normalized();
+    radius += step(5);
+    minor += step(6);
+    return std::max({step.head<3>().cwiseAbs().maxCoeff(), std::abs(step(5)), std::abs(step(6)),
+                     c.size * std::abs(step(3)), c.size * std::abs(step(4))});
+  };
+  f.status = gauss_newton(n, 7, c.size, f.iterations, linearise, update);
+  if (f.status == ElementFitStatus::Degenerate || !(minor > 0.0)) {
+    f.status = ElementFitStatus::Degenerate;
+    return f;
+  }
+  f.center = c.centroid + centre_estimate;
+  f.axis = axis;
+  f.radius = radius;
+  f.minor_radius = minor;
+  Eigen::VectorXd d(n);
+  for (Eigen::Index i = 0; i < n; ++i) d(i) = distance(f, c.centroid + c.p[static_cast<std::size_t>(i)]);
+  f.rms = rms_of(d);
+  return f;
+}
+
 }  // namespace
 
 const char* to_string(ElementFitStatus s) {
@@ -233,6 +333,34 @@ CylinderFit fit_cylinder(std::span<const Point3> points) {
     if (better || (best.status == ElementFitStatus::Degenerate && f.status == ElementFitStatus::NotConverged)) best = f;
   }
   return best;
+}
+
+ConeFit fit_cone(std::span<const Point3> points, const ConeFit& start) {
+  ConeFit f;
+  if (points.size() < 6 || !(start.axis.norm() > 0.0)) return f;
+  const Centred c = centre(points);
+  return cone_from(c, start.axis.normalized(), start.axis_point - c.centroid, start.radius, start.half_angle);
+}
+
+TorusFit fit_torus(std::span<const Point3> points, const TorusFit& start) {
+  TorusFit f;
+  if (points.size() < 7 || !(start.axis.norm() > 0.0)) return f;
+  const Centred c = centre(points);
+  return torus_from(c, start.axis.normalized(), start.center - c.centroid, start.radius, start.minor_radius);
+}
+
+double distance(const ConeFit& cone, const Point3& x) {
+  const Vector3 q = x - cone.axis_point;
+  const double h = q.dot(cone.axis);
+  const double rho = (q - h * cone.axis).norm();
+  return (rho - cone.radius - h * std::tan(cone.half_angle)) * std::cos(cone.half_angle);
+}
+
+double distance(const TorusFit& torus, const Point3& x) {
+  const Vector3 q = x - torus.center;
+  const double h = q.dot(torus.axis);
+  const double rho = (q - h * torus.axis).norm();
+  return std::hypot(rho - torus.radius, h) - torus.minor_radius;
 }
 
 }  // namespace probecomp::fitting

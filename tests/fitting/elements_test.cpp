@@ -1,6 +1,7 @@
-// Least-squares planes, spheres and cylinders: exact on exact data, refusing data that do not fix the element,
-// and on NIST-style reference data (selftest::reference_elements) the known element; plus an optimality check that
-// uses only distances: no small change of the fitted element lowers the sum of squares.
+// Least-squares planes, spheres, cylinders, cones and tori: exact on exact data, refusing data that do not fix the
+// element, and on NIST-style reference data (selftest::reference_elements) the known element; plus an optimality
+// check that uses only distances (computed here, not by the code under test): no small change of the fitted element
+// lowers the sum of squares.
 
 #include "probecomp/fitting/elements.hpp"
 
@@ -136,6 +137,163 @@ TEST(ElementFits, NoSmallChangeOfTheFittedCylinderLowersTheSumOfSquares) {
       EXPECT_GE(cylinder_ss(x, f.axis_point, f.axis + sign * h * u, f.radius), best);
       EXPECT_GE(cylinder_ss(x, f.axis_point, f.axis + sign * h * w, f.radius), best);
       EXPECT_GE(cylinder_ss(x, f.axis_point, f.axis, f.radius + sign * h), best);
+    }
+  }
+}
+
+// Points of a cone and a torus from their parametric form (not from a distance), far from the origin and tilted.
+struct Frame {
+  Point3 c;
+  Vector3 a, s, q;
+  Frame(const Point3& centre, const Vector3& axis)
+      : c(centre), a(axis.normalized()), s(a.unitOrthogonal()), q(a.cross(s)) {}
+  [[nodiscard]] Vector3 radial(double phi) const { return std::cos(phi) * s + std::sin(phi) * q; }
+};
+
+// Cone: radius r0 at the axis point c, growing along a at the half-angle alpha.
+Point3 on_cone(const Frame& f, double r0, double alpha, double phi, double h) {
+  return f.c + (r0 + h * std::tan(alpha)) * f.radial(phi) + h * f.a;
+}
+Point3 on_torus(const Frame& f, double R, double r, double u, double v) {
+  return f.c + (R + r * std::cos(v)) * f.radial(u) + r * std::sin(v) * f.a;
+}
+
+// Σ d² in the meridian half-plane (ρ, h): the cone's generator through (r0, 0) along (sin α, cos α), the torus's
+// tube circle about (R, 0).
+double cone_ss(const std::vector<Point3>& x, const Point3& p, const Vector3& axis, double r0, double alpha) {
+  const Vector3 a = axis.normalized();
+  double ss = 0.0;
+  for (const Point3& y : x) {
+    const double h = (y - p).dot(a), rho = ((y - p) - h * a).norm();
+    const double d = (rho - r0) * std::cos(alpha) - h * std::sin(alpha);
+    ss += d * d;
+  }
+  return ss;
+}
+double torus_ss(const std::vector<Point3>& x, const Point3& c, const Vector3& axis, double R, double r) {
+  const Vector3 a = axis.normalized();
+  double ss = 0.0;
+  for (const Point3& y : x) {
+    const double h = (y - c).dot(a), rho = ((y - c) - h * a).norm();
+    const double d = std::hypot(rho - R, h) - r;
+    ss += d * d;
+  }
+  return ss;
+}
+
+TEST(ElementFits, ConesAndToriFromANearbyStartAreExactOnExactData) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> t(0.0, 1.0);
+  // A widening cone (a boss's taper) and a narrowing one (a countersink along its axis), on 120° of their turn.
+  for (const double alpha : {25.0 * std::numbers::pi / 180, -30.0 * std::numbers::pi / 180}) {
+    SCOPED_TRACE(alpha);
+    const Frame f(Point3(250, -120, 60), Vector3(0.2, -0.4, 1.0));
+    std::vector<Point3> x;
+    for (int k = 0; k < 40; ++k) {
+      const double phi = 2.1 * t(rng);
+      const double h = -4.0 + 10.0 * t(rng);
+      x.push_back(on_cone(f, 12.0, alpha, phi, h));
+    }
+    // The start: axis 1° off, 0.3 mm aside and at another height, radius 0.05 mm and angle 0.6° off.
+    ConeFit start;
+    start.axis = (f.a + 0.0175 * f.s).normalized();
+    start.axis_point = f.c + 0.3 * f.s + 2.0 * f.a;
+    start.radius = 12.0 + 2.0 * std::tan(alpha) + 0.05;
+    start.half_angle = alpha + 0.01;
+    const ConeFit cone = fit_cone(x, start);
+    ASSERT_EQ(cone.status, ElementFitStatus::OK);
+    EXPECT_LT(angle(cone.axis, f.a), 1e-11);
+    EXPECT_GT(cone.axis.dot(f.a), 0.0);
+    const Vector3 off = f.c - cone.axis_point;
+    const double h = off.dot(cone.axis);
+    EXPECT_LT((off - h * cone.axis).norm(), 1e-9);
+    EXPECT_NEAR(cone.radius + h * std::tan(cone.half_angle), 12.0, 1e-9);
+    EXPECT_NEAR(cone.half_angle, alpha, 1e-11);
+    EXPECT_LT(cone.rms, 1e-10);
+    for (const Point3& y : x) EXPECT_NEAR(distance(cone, y), 0.0, 1e-9);
+    EXPECT_NEAR(distance(cone, x[0] + 0.01 * (x[0] - cone.axis_point).cross(cone.axis).cross(cone.axis).normalized()),
+                -0.01 * std::cos(alpha), 1e-6);  // toward the axis: inside
+  }
+  // A torus (a fillet's) on a quarter of its tube and 100° of its turn.
+  const Frame f(Point3(-80, 40, 300), Vector3(-0.3, 0.1, 1.0));
+  std::vector<Point3> x;
+  for (int k = 0; k < 40; ++k) {
+    const double u = 1.75 * t(rng);
+    const double v = -0.2 + 1.6 * t(rng);
+    x.push_back(on_torus(f, 30.0, 5.0, u, v));
+  }
+  TorusFit start;
+  start.axis = (f.a + 0.0175 * f.q).normalized();
+  start.center = f.c + Vector3(0.2, -0.1, 0.15);
+  start.radius = 30.05;
+  start.minor_radius = 4.95;
+  const TorusFit torus = fit_torus(x, start);
+  ASSERT_EQ(torus.status, ElementFitStatus::OK);
+  EXPECT_LT(angle(torus.axis, f.a), 1e-11);
+  EXPECT_LT((torus.center - f.c).norm(), 1e-9);
+  EXPECT_NEAR(torus.radius, 30.0, 1e-9);
+  EXPECT_NEAR(torus.minor_radius, 5.0, 1e-9);
+  EXPECT_LT(torus.rms, 1e-10);
+  for (const Point3& y : x) EXPECT_NEAR(distance(torus, y), 0.0, 1e-9);
+}
+
+TEST(ElementFits, ConesAndToriThatThePointsDoNotFixAreDegenerate) {
+  const Frame f(Point3(5, 6, 7), Vector3(0, 0.3, 1));
+  std::vector<Point3> ring, equator;
+  for (int k = 0; k < 20; ++k) {
+    ring.push_back(on_cone(f, 10.0, 0.4, 0.3 * k, 0.0));       // one height: the angle trades for the radius
+    equator.push_back(on_torus(f, 30.0, 5.0, 0.3 * k, 0.0));   // the tube's outer equator: R + r alone is fixed
+  }
+  const ConeFit cone{.axis_point = f.c, .axis = f.a, .radius = 10.0, .half_angle = 0.4};
+  const TorusFit torus{.center = f.c, .axis = f.a, .radius = 30.0, .minor_radius = 5.0};
+  EXPECT_EQ(fit_cone(ring, cone).status, ElementFitStatus::Degenerate);
+  EXPECT_EQ(fit_torus(equator, torus).status, ElementFitStatus::Degenerate);
+  EXPECT_EQ(fit_cone(std::vector<Point3>(ring.begin(), ring.begin() + 5), cone).status, ElementFitStatus::Degenerate);
+  EXPECT_EQ(fit_torus(std::vector<Point3>(ring.begin(), ring.begin() + 6), torus).status, ElementFitStatus::Degenerate);
+}
+
+TEST(ElementFits, NoSmallChangeOfTheFittedConeOrTorusLowersTheSumOfSquares) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> t(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  const Frame f(Point3(40, 10, -5), Vector3(0.3, 1, 0.2));
+  std::vector<Point3> cone_points, torus_points;
+  for (int k = 0; k < 60; ++k) {
+    const double phi = 1.8 * t(rng);
+    const double h = 8.0 * t(rng);
+    cone_points.push_back(on_cone(f, 9.0, 0.5, phi, h) + simulation::draw_vector(noise, rng));
+    const double u = 1.8 * t(rng);
+    const double v = 1.6 * t(rng);
+    torus_points.push_back(on_torus(f, 25.0, 4.0, u, v) + simulation::draw_vector(noise, rng));
+  }
+  const ConeFit cone = fit_cone(cone_points, {.axis_point = f.c, .axis = f.a, .radius = 9.0, .half_angle = 0.5});
+  ASSERT_EQ(cone.status, ElementFitStatus::OK);
+  const double cone_best = cone_ss(cone_points, cone.axis_point, cone.axis, cone.radius, cone.half_angle);
+  EXPECT_NEAR(std::sqrt(cone_best / cone_points.size()), cone.rms, 1e-12);
+  const TorusFit torus = fit_torus(torus_points, {.center = f.c, .axis = f.a, .radius = 25.0, .minor_radius = 4.0});
+  ASSERT_EQ(torus.status, ElementFitStatus::OK);
+  const double torus_best = torus_ss(torus_points, torus.center, torus.axis, torus.radius, torus.minor_radius);
+  EXPECT_NEAR(std::sqrt(torus_best / torus_points.size()), torus.rms, 1e-12);
+  const Vector3 cu = cone.axis.unitOrthogonal(), cw = cone.axis.cross(cu);
+  const Vector3 tu = torus.axis.unitOrthogonal(), tw = torus.axis.cross(tu);
+  for (const double h : {1e-4, 1e-3}) {
+    for (const double sign : {-1.0, 1.0}) {
+      const double e = sign * h;
+      const Point3& p = cone.axis_point;
+      EXPECT_GE(cone_ss(cone_points, p + e * cu, cone.axis, cone.radius, cone.half_angle), cone_best);
+      EXPECT_GE(cone_ss(cone_points, p + e * cw, cone.axis, cone.radius, cone.half_angle), cone_best);
+      EXPECT_GE(cone_ss(cone_points, p, cone.axis + e * cu, cone.radius, cone.half_angle), cone_best);
+      EXPECT_GE(cone_ss(cone_points, p, cone.axis + e * cw, cone.radius, cone.half_angle), cone_best);
+      EXPECT_GE(cone_ss(cone_points, p, cone.axis, cone.radius + e, cone.half_angle), cone_best);
+      EXPECT_GE(cone_ss(cone_points, p, cone.axis, cone.radius, cone.half_angle + e), cone_best);
+      const Point3& c = torus.center;
+      for (const Vector3& d : {tu, tw, Vector3(torus.axis)}) {
+        EXPECT_GE(torus_ss(torus_points, c + e * d, torus.axis, torus.radius, torus.minor_radius), torus_best);
+      }
+      EXPECT_GE(torus_ss(torus_points, c, torus.axis + e * tu, torus.radius, torus.minor_radius), torus_best);
+      EXPECT_GE(torus_ss(torus_points, c, torus.axis + e * tw, torus.radius, torus.minor_radius), torus_best);
+      EXPECT_GE(torus_ss(torus_points, c, torus.axis, torus.radius + e, torus.minor_radius), torus_best);
+      EXPECT_GE(torus_ss(torus_points, c, torus.axis, torus.radius, torus.minor_radius + e), torus_best);
     }
   }
 }

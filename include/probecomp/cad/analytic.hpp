@@ -97,6 +97,11 @@ class AnalyticFace {
   // The same face offset by d along S_u × S_v of its NURBS (the parametrisation is kept, as offset_surface keeps
   // it); none where the offset degenerates.
   [[nodiscard]] std::optional<AnalyticFace> offset(double d) const;
+  // The unbounded surface offset so, even where it degenerates inside the face's range (a countersink's offset cone
+  // whose apex falls inside it): what points off the degenerate part lie on. None where it has no radius at all.
+  [[nodiscard]] std::optional<ElementarySurface> offset_surface(double d) const {
+    return surface_.offset(normal_sign_ * d);
+  }
   // The largest distance (mm) between the NURBS and this face at the same (u, v), and the largest angle between
   // their normals (radians; poles and apexes skipped), over a grid of `per_span` steps per knot span and direction.
   struct Check {

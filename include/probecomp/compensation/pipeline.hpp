@@ -78,8 +78,8 @@ struct FaceReport {
   int face = -1;          // cad::Face::index
   int points = 0;         // points assigned to the face by their correspondence
   bool fitted = false;    // else its points were offset along the nominal normal (too few for a fit)
-  // Too few points for its NURBS fit, but fitted as the plane, cylinder or sphere it is: its points are offset
-  // along that element's normal (status ok).
+  // Too few points for its NURBS fit, but fitted as the plane, cylinder, sphere, cone or torus it is: its points are
+  // offset along that element's normal (status ok).
   std::optional<cad::ElementaryKind> fitted_as;
   int outward = 1;        // of the fitted surface, as cad::Face::outward
   cad::MaterialSource material = cad::MaterialSource::File;
@@ -202,17 +202,19 @@ struct FitOptions {
 };
 
 // One face's points and its fit.
-// A face with too few points for its NURBS net, fitted as the plane, cylinder or sphere it is (its centres' own
+// A face with too few points for its NURBS net, fitted as the elementary surface it is (its centres' own
 // least-squares element, fitting/elements.hpp; the tip's centres lie on an element of the same kind and axis), in
 // the machine frame.
 struct ElementFaceFit {
   cad::ElementaryKind kind = cad::ElementaryKind::Plane;
-  Point3 point = Point3::Zero();    // plane: the centroid; cylinder: a point of the axis; sphere: the centre
-  Vector3 axis = Vector3::Zero();   // plane: its normal; cylinder: the axis (unit, sign arbitrary)
-  double radius = 0.0;              // of the centres' cylinder or sphere, mm
+  Point3 point = Point3::Zero();    // plane: the centroid; cylinder, cone: an axis point; sphere, torus: the centre
+  Vector3 axis = Vector3::Zero();   // plane: its normal; cylinder, cone, torus: the axis (unit)
+  double radius = 0.0;              // the centres' cylinder's or sphere's, the cone's at `point`, the torus's major
+  double half_angle = 0.0;          // cone: radians, its radius growing along `axis` (fitting::ConeFit)
+  double minor_radius = 0.0;        // torus: the tube's, mm
   double rms = 0.0;                 // of the points used, orthogonal to the element, mm
   int used = 0;                     // points used (the rest left out as outliers)
-  int parameters = 0;               // the element's: 3 plane, 4 sphere, 5 cylinder
+  int parameters = 0;               // the element's: 3 plane, 4 sphere, 5 cylinder, 6 cone, 7 torus
 };
 
 struct FaceFit {

@@ -1,10 +1,11 @@
 #pragma once
 // Least-squares geometric elements, as ISO 10360-6 and ASME B89.4.10 define them for testing CMM software: the
-// plane, sphere and cylinder that minimise the sum of squared orthogonal distances of the points ("Gaussian"
-// fits). The plane is closed form (the smallest principal direction of the centred points); the sphere and the
-// cylinder are Gauss-Newton on the orthogonal distances (Forbes, NPL Report DITC 140/89, "Least-squares best-fit
-// geometric elements"), solved by QR, in coordinates centred on the points so that data far from the origin
-// lose no digits.
+// plane, sphere, cylinder, cone and torus that minimise the sum of squared orthogonal distances of the points
+// ("Gaussian" fits). The plane is closed form (the smallest principal direction of the centred points); the others
+// are Gauss-Newton on the orthogonal distances (Forbes, NPL Report DITC 140/89, "Least-squares best-fit geometric
+// elements"), solved by QR, in coordinates centred on the points so that data far from the origin lose no digits.
+// The cone and the torus start from a given element (a part's nominal face offset by the tip): a few points on a
+// band of one admit other cones and tori far from it, which no start-free search should pick.
 
 #include <span>
 
@@ -44,6 +45,28 @@ struct CylinderFit {
   int iterations = 0;
 };
 
+// The radius at the axis point grows along the axis at the half-angle (negative: it shrinks), as OpenCASCADE's
+// cone with its semi-angle.
+struct ConeFit {
+  ElementFitStatus status = ElementFitStatus::Degenerate;
+  Point3 axis_point = Point3::Zero();  // the axis's point nearest the points' centroid
+  Vector3 axis = Vector3::UnitZ();     // unit
+  double radius = 0.0;                 // at axis_point, mm
+  double half_angle = 0.0;             // radians, in (−π/2, π/2)
+  double rms = 0.0;
+  int iterations = 0;
+};
+
+struct TorusFit {
+  ElementFitStatus status = ElementFitStatus::Degenerate;
+  Point3 center = Point3::Zero();
+  Vector3 axis = Vector3::UnitZ();  // unit; its sign is arbitrary
+  double radius = 0.0;              // major: the tube's centre circle
+  double minor_radius = 0.0;        // the tube's
+  double rms = 0.0;
+  int iterations = 0;
+};
+
 // At least 3 points not on one line.
 [[nodiscard]] PlaneFit fit_plane(std::span<const Point3> points);
 // At least 4 points not on one plane. Starts from the algebraic (linear) sphere fit.
@@ -51,5 +74,14 @@ struct CylinderFit {
 // At least 5 points. Starts from each principal direction of the points in turn as the axis and keeps the best
 // converged fit, so a short cylinder or an arc of one needs no guess.
 [[nodiscard]] CylinderFit fit_cylinder(std::span<const Point3> points);
+// At least 6 and 7 points (their parameters), from `start` (its status, rms and iterations are not read).
+// Degenerate when the points do not fix the element: a band too narrow to tell a cone's angle from its radius.
+[[nodiscard]] ConeFit fit_cone(std::span<const Point3> points, const ConeFit& start);
+[[nodiscard]] TorusFit fit_torus(std::span<const Point3> points, const TorusFit& start);
+
+// Signed orthogonal distances, mm: positive on the side away from the axis (cone) or the tube's centre circle
+// (torus). The cone's is that from its nappe the axis point is on.
+[[nodiscard]] double distance(const ConeFit& cone, const Point3& x);
+[[nodiscard]] double distance(const TorusFit& torus, const Point3& x);
 
 }  // namespace probecomp::fitting
