@@ -1,10 +1,9 @@
 # Sourced by scripts/test.sh --sanitize and scripts/fuzz.sh: the one instrumented build, build-sanitize/, and the
-# sanitizers' settings. clang, AddressSanitizer and UndefinedBehaviorSanitizer at -O2 (CMakeLists.txt), and the fuzz targets
-# (-DPROBECOMP_FUZZ=ON: libFuzzer's coverage in the readers' layers): the tests and the fuzz targets link the same
-# instrumented library, compiled once (CI within 30 minutes; clang also compiled our template-heavy files in two
-# thirds of gcc's time). No Python package: the
-# interpreter would have to preload the sanitizers' runtime to load it. A unity build, as every build by default
-# (CMakeLists.txt).
+# sanitizers' settings. clang, AddressSanitizer and UndefinedBehaviorSanitizer at -O2 (CMakeLists.txt), and the
+# fuzz targets (-DPROBECOMP_FUZZ=ON: libFuzzer's coverage in the readers' layers): the tests and the fuzz targets link
+# the same instrumented library, compiled once (CI within 30 minutes; clang also compiled our template-heavy files in
+# two thirds of gcc's time). No Python package: the interpreter would have to preload the sanitizers' runtime to load
+# it. A unity build, as every build by default (CMakeLists.txt).
 sanitize_build_dir=build-sanitize
 configure_sanitize_build() {
   # The compiler named, not taken from CXX: CXX is read only when a build folder is first configured.
