@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <random>
 
 #include "probecomp/cad/analytic.hpp"
@@ -38,24 +39,44 @@ std::vector<simulation::ProgrammedPoint> sparse_plan(const cad::Face& face, int 
   return out;
 }
 
+// Up to `faces` faces of each kind (in the model's order) whose sparse_plan of `points` holds at least 12 points.
+struct KindQuota {
+  cad::ElementaryKind kind;
+  int faces = 0;
+  int points = 0;
+};
+struct SparsePlan {
+  std::vector<simulation::ProgrammedPoint> plan;
+  std::vector<int> faces;              // cad::Face::index of each face planned
+  std::map<cad::ElementaryKind, int> count;  // faces planned, by kind
+};
+SparsePlan plan_faces_of_kinds(const cad::Model& part, const std::vector<KindQuota>& quotas, double margin,
+                               std::mt19937_64& rng) {
+  SparsePlan out;
+  for (const cad::Face& face : part.faces) {
+    if (!face.analytic) continue;
+    const cad::ElementaryKind kind = face.analytic->surface().kind;
+    const auto q = std::find_if(quotas.begin(), quotas.end(), [&](const KindQuota& k) { return k.kind == kind; });
+    if (q == quotas.end() || out.count[kind] >= q->faces) continue;
+    const std::vector<simulation::ProgrammedPoint> p = sparse_plan(face, q->points, margin, rng);
+    if (p.size() < 12) continue;
+    out.plan.insert(out.plan.end(), p.begin(), p.end());
+    out.faces.push_back(face.index);
+    ++out.count[kind];
+  }
+  return out;
+}
+
 TEST(ElementFaces, SparseTouchesOnPlanesAndCylindersAreFittedAsThoseAndOk) {
   const cad::Model part = cad::read_model(test::kCadDir / "nist_stc_06_asme1_ap242-e3.stp");
   // The largest plane and cylinder faces (by their NURBS's parameter area on the part: their extent), 12–20 points
   // each.
   std::mt19937_64 rng(31);
-  std::vector<simulation::ProgrammedPoint> plan;
-  int planes = 0, cylinders = 0;
-  for (const cad::Face& face : part.faces) {
-    if (!face.analytic) continue;
-    const cad::ElementaryKind kind = face.analytic->surface().kind;
-    const bool plane = kind == cad::ElementaryKind::Plane, cylinder = kind == cad::ElementaryKind::Cylinder;
-    if (!(plane && planes < 8) && !(cylinder && cylinders < 6)) continue;
-    const std::vector<simulation::ProgrammedPoint> p = sparse_plan(face, plane ? 16 : 14, 3.0, rng);
-    if (p.size() < 12) continue;
-    plan.insert(plan.end(), p.begin(), p.end());
-    planes += plane;
-    cylinders += cylinder;
-  }
+  SparsePlan planned = plan_faces_of_kinds(
+      part, {{cad::ElementaryKind::Plane, 8, 16}, {cad::ElementaryKind::Cylinder, 6, 14}}, 3.0, rng);
+  const std::vector<simulation::ProgrammedPoint>& plan = planned.plan;
+  const int planes = planned.count[cad::ElementaryKind::Plane];
+  const int cylinders = planned.count[cad::ElementaryKind::Cylinder];
   ASSERT_GE(planes, 6);
   ASSERT_GE(cylinders, 4);
   const studies::SimulatedMeasurement m{
@@ -99,21 +120,11 @@ TEST(ElementFaces, SparseTouchesOnPlanesAndCylindersAreFittedAsThoseAndOk) {
 TEST(ElementFaces, SparseTouchesOnConesAndToriAreFittedAsThoseAndOk) {
   const cad::Model part = cad::read_model(test::kCadDir / "nist_ctc_04_asme1_ap242-e1.stp");
   std::mt19937_64 rng(37);
-  std::vector<simulation::ProgrammedPoint> plan;
-  std::vector<int> chosen;
-  int cones = 0, tori = 0;
-  for (const cad::Face& face : part.faces) {
-    if (!face.analytic) continue;
-    const cad::ElementaryKind kind = face.analytic->surface().kind;
-    const bool cone = kind == cad::ElementaryKind::Cone, torus = kind == cad::ElementaryKind::Torus;
-    if (!(cone && cones < 8) && !(torus && tori < 6)) continue;
-    const std::vector<simulation::ProgrammedPoint> p = sparse_plan(face, 16, 0.5, rng);
-    if (p.size() < 12) continue;
-    plan.insert(plan.end(), p.begin(), p.end());
-    chosen.push_back(face.index);
-    cones += cone;
-    tori += torus;
-  }
+  SparsePlan planned = plan_faces_of_kinds(
+      part, {{cad::ElementaryKind::Cone, 8, 16}, {cad::ElementaryKind::Torus, 6, 16}}, 0.5, rng);
+  const std::vector<simulation::ProgrammedPoint>& plan = planned.plan;
+  const std::vector<int>& chosen = planned.faces;
+  const int cones = planned.count[cad::ElementaryKind::Cone], tori = planned.count[cad::ElementaryKind::Torus];
   ASSERT_GE(cones, 6);
   ASSERT_GE(tori, 4);
   const studies::SimulatedMeasurement m{
