@@ -21,6 +21,11 @@ constexpr double kElementOutlierScales = 5.0;
 // kMaxRadiusChange of the nominal's offset by the tip (a hole's centres lie at R − r, a pin's at R + r).
 constexpr double kMaxElementTilt = 3.0 * std::numbers::pi / 180.0;
 constexpr double kMaxRadiusChange = 0.1;  // mm
+// A combination of a cone's or torus's parameters is fitted where the points fix it to this standard deviation (mm),
+// and held at the nominal's where they do not (fitting::HoldPoorlyFixed): a move of 4 σ then stays within
+// kMaxRadiusChange. Twelve touches on a short arc of a fillet fix its major radius and its centre's place together,
+// not apart (CTC-04: fits that moved the radius 0.2–0.26 mm and were refused before).
+constexpr double kMaxFittedStd = kMaxRadiusChange / 4.0;
 
 // The scale is not taken below this (mm): on exact data the residuals are rounding, and every point would stand out.
 constexpr double kScaleFloor = 1e-4;
@@ -67,7 +72,8 @@ std::optional<ElementFaceFit> centres_element(const cad::Face& face, const geome
   return e;
 }
 
-Fitted fit_kind(cad::ElementaryKind kind, std::span<const Point3> pts, const ElementFaceFit& start) {
+Fitted fit_kind(cad::ElementaryKind kind, std::span<const Point3> pts, const ElementFaceFit& start, double noise) {
+  const fitting::HoldPoorlyFixed limits{.sigma = std::max(noise, kScaleFloor), .max_std = kMaxFittedStd};
   Fitted out;
   if (kind == cad::ElementaryKind::Plane) {
     const fitting::PlaneFit f = fitting::fit_plane(pts);
@@ -79,13 +85,15 @@ Fitted fit_kind(cad::ElementaryKind kind, std::span<const Point3> pts, const Ele
     const fitting::SphereFit f = fitting::fit_sphere(pts);
     out = as_element(kind, f.status, f.center, Vector3::Zero(), f.radius, f.rms, 4, pts.size());
   } else if (kind == cad::ElementaryKind::Cone) {
-    const fitting::ConeFit f = fitting::fit_cone(pts, as_cone(start));
-    out = as_element(kind, f.status, f.axis_point, f.axis, f.radius, f.rms, 6, pts.size());
+    const fitting::ConeFit f = fitting::fit_cone(pts, as_cone(start), limits);
+    out = as_element(kind, f.status, f.axis_point, f.axis, f.radius, f.rms, 6 - f.held, pts.size());
     out.e.half_angle = f.half_angle;
+    out.e.held = f.held;
   } else if (kind == cad::ElementaryKind::Torus) {
-    const fitting::TorusFit f = fitting::fit_torus(pts, as_torus(start));
-    out = as_element(kind, f.status, f.center, f.axis, f.radius, f.rms, 7, pts.size());
+    const fitting::TorusFit f = fitting::fit_torus(pts, as_torus(start), limits);
+    out = as_element(kind, f.status, f.center, f.axis, f.radius, f.rms, 7 - f.held, pts.size());
     out.e.minor_radius = f.minor_radius;
+    out.e.held = f.held;
   }
   // At least one degree of freedom more than the element has: else the fit passes through the points and says
   // nothing of the noise.
@@ -116,14 +124,14 @@ bool like_nominal(const ElementFaceFit& e, const ElementFaceFit& nominal) {
 }  // namespace
 
 std::optional<ElementFaceFit> fit_element_face(const cad::Face& face, std::span<const Point3> centres,
-                                               const geometry::RigidTransform& to_machine, double r,
+                                               const geometry::RigidTransform& to_machine, double r, double noise,
                                                std::vector<char>& outlier) {
   if (!face.analytic || centres.empty()) return std::nullopt;
   const cad::ElementaryKind kind = face.analytic->surface().kind;
   const std::optional<ElementFaceFit> nominal = centres_element(face, to_machine, r);
   if (!nominal) return std::nullopt;
   outlier.assign(centres.size(), 0);
-  Fitted all = fit_kind(kind, centres, *nominal);
+  Fitted all = fit_kind(kind, centres, *nominal, noise);
   if (!all.ok || !like_nominal(all.e, *nominal)) {
     outlier.assign(centres.size(), 0);
     return std::nullopt;
@@ -138,7 +146,7 @@ std::optional<ElementFaceFit> fit_element_face(const cad::Face& face, std::span<
     if (!outlier[k]) kept.push_back(centres[k]);
   }
   if (kept.size() == centres.size()) return all.e;
-  Fitted again = fit_kind(kind, kept, all.e);
+  Fitted again = fit_kind(kind, kept, *nominal, noise);
   if (!again.ok || !like_nominal(again.e, *nominal)) {
     outlier.assign(centres.size(), 0);
     return all.e;

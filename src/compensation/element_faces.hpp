@@ -14,14 +14,15 @@ namespace probecomp::compensation::detail {
 
 // The face's element fitted to its tip centres (machine frame, as the faces' NURBS fits; `to_machine` the
 // registration), with points beyond kElementOutlierScales robust scales of the fit's residuals left out (`outlier`,
-// per centre, set to 1) and the element fitted again. A cone or torus starts from the nominal's offset. Nothing
+// per centre, set to 1) and the element fitted again. A cone or torus starts from the nominal's offset and holds
+// there what its centres fix too poorly, given their `noise` along the normal (mm; kMaxFittedStd). Nothing
 // where the face is not an elementary surface, the centres do not fix the element (too few, all on a line, a band
 // too narrow for a cone's angle), or the element is not the nominal's offset by the tip radius `r` to within
 // kMaxElementTilt and kMaxRadiusChange (a hole narrower than the tip, a fit that found another shape in a few
 // points): those points stay offset along the nominal normal.
 [[nodiscard]] std::optional<ElementFaceFit> fit_element_face(const cad::Face& face, std::span<const Point3> centres,
                                                              const geometry::RigidTransform& to_machine, double r,
-                                                             std::vector<char>& outlier);
+                                                             double noise, std::vector<char>& outlier);
 
 // The signed distance of x from the element, mm (plane: along its normal as fitted; the others: positive away from
 // the axis, centre or tube's centre circle).

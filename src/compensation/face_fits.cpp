@@ -318,7 +318,10 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
         // Too few for the NURBS, but an elementary surface is fixed by a handful: fitted as that, its points
         // offset along its normal (contact_points.cpp), not the nominal's.
         std::vector<char> left_out;
-        ff.element = detail::fit_element_face(face, pts, registration.transform, prepared.radii.smallest(), left_out);
+        // The registration's residual scale stands for the centres' noise: the element's own residuals would judge
+        // the fit by itself.
+        ff.element = detail::fit_element_face(face, pts, registration.transform, prepared.radii.smallest(),
+                                              registration.scale, left_out);
         if (ff.element) {
           rep.fitted_as = ff.element->kind;
           for (std::size_t i = 0; i < members.size(); ++i) ff.trusted[i] = !left_out[position[i]];
@@ -326,7 +329,10 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
           const double noise = detail::element_noise(*ff.element);
           if (std::isfinite(noise)) rep.noise_sigma = noise;
           rep.stop_reason = std::string("fitted as a ") + cad::to_string(ff.element->kind) + ": " + too_few +
-                            "; " + std::to_string(ff.element->used) + " points used, rms " + mm(ff.element->rms);
+                            "; " + std::to_string(ff.element->used) + " points used, rms " + mm(ff.element->rms) +
+                            (ff.element->held > 0 ? ", " + std::to_string(ff.element->held) +
+                                                        " of its parameters' combinations held at the nominal's"
+                                                  : "");
         } else {
           rep.stop_reason = kNotFitted + too_few + kOffsetAlongNominal;
         }

@@ -30,17 +30,47 @@ bool settled(double moved, double last_moved, double size) {
 // Gauss-Newton on n orthogonal distances in `parameters` unknowns. `linearise(J, d)` fills the Jacobian and the
 // distances at the current estimate (false: a point where the distance has no direction); `update(step)` applies
 // a step and returns how far it moved the element (mm). Degenerate when a step cannot be solved for.
+//
+// With `hold` (a cone's or torus's fit from the nominal), the steps leave out the combinations of parameters the
+// points fix too poorly: the singular vectors of J S (S = `hold->scale`, parameters in mm) whose singular value is
+// below `hold->min_singular`. Each step is then the least-squares step within the others (truncated SVD; Hansen,
+// "Rank-Deficient and Discrete Ill-Posed Problems", 1998, §3.2), so those combinations stay at the start's values;
+// `hold->held` counts them at the last step.
+struct Hold {
+  Eigen::VectorXd scale;
+  double min_singular = 0.0;
+  int held = 0;
+};
 template <class Linearise, class Update>
 ElementFitStatus gauss_newton(Eigen::Index n, Eigen::Index parameters, double size, int& iterations,
-                              Linearise&& linearise, Update&& update) {
+                              Linearise&& linearise, Update&& update, Hold* hold = nullptr) {
   Eigen::MatrixXd J(n, parameters);
   Eigen::VectorXd d(n);
   double last_moved = std::numeric_limits<double>::infinity();
   for (iterations = 1; iterations <= kMaxIterations; ++iterations) {
     if (!linearise(J, d)) return ElementFitStatus::Degenerate;
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J);
-    if (qr.rank() < parameters) return ElementFitStatus::Degenerate;
-    const Eigen::VectorXd step = qr.solve(-d);
+    Eigen::VectorXd step;
+    if (hold != nullptr) {
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J * hold->scale.asDiagonal(), Eigen::ComputeThinU | Eigen::ComputeThinV);
+      const Eigen::VectorXd& s = svd.singularValues();
+      // Rounding's floor as well: a combination the points do not fix at all (a torus's equator) is held too.
+      const double floor = std::max(hold->min_singular, 1e-12 * s(0));
+      Eigen::VectorXd within = Eigen::VectorXd::Zero(parameters);
+      hold->held = 0;
+      for (Eigen::Index i = 0; i < s.size(); ++i) {
+        if (s(i) > floor) {
+          within(i) = -svd.matrixU().col(i).dot(d) / s(i);
+        } else {
+          ++hold->held;
+        }
+      }
+      hold->held += static_cast<int>(parameters - s.size());
+      step = hold->scale.asDiagonal() * (svd.matrixV() * within);
+    } else {
+      const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J);
+      if (qr.rank() < parameters) return ElementFitStatus::Degenerate;
+      step = qr.solve(-d);
+    }
     if (!step.allFinite()) return ElementFitStatus::Degenerate;
     const double moved = update(step);
     if (settled(moved, last_moved, size)) return ElementFitStatus::OK;
@@ -94,6 +124,12 @@ std::optional<Algebraic> algebraic_fit(const Eigen::MatrixXd& X) {
   Algebraic out{s.head(dim), 0.0};
   out.radius = std::sqrt(std::max(s(dim) + out.centre.squaredNorm(), 0.0));
   return out;
+}
+
+// The Hold for gauss_newton from the caller's limits; none when they ask for every parameter to be fitted.
+std::optional<Hold> hold_for(const HoldPoorlyFixed& limits, Eigen::VectorXd scale) {
+  if (!(limits.sigma > 0.0) || !(limits.max_std > 0.0)) return std::nullopt;
+  return Hold{.scale = std::move(scale), .min_singular = limits.sigma / limits.max_std};
 }
 
 // A rotation taking `axis` (unit) to +z.
@@ -151,7 +187,8 @@ CylinderFit cylinder_from(const Centred& c, Vector3 axis, Point3 through, double
 // a = b = x0 = y0 = 0, ρ moves as for the cylinder and h by (x, y) per (a, b), so its derivatives in
 // (x0, y0, a, b, r, α) are (−c x/ρ, −c y/ρ, −c xz/ρ − s x, −c yz/ρ − s y, −c, −(ρ − r) s − h c), c = cos α, s = sin α.
 // After each step `through` goes back to the axis point nearest the centroid, r with it.
-ConeFit cone_from(const Centred& c, Vector3 axis, Point3 through, double radius, double half_angle) {
+ConeFit cone_from(const Centred& c, Vector3 axis, Point3 through, double radius, double half_angle,
+                  const HoldPoorlyFixed& limits) {
   ConeFit f;
   const Eigen::Index n = static_cast<Eigen::Index>(c.p.size());
   Eigen::Matrix3d R;
@@ -184,7 +221,11 @@ ConeFit cone_from(const Centred& c, Vector3 axis, Point3 through, double radius,
                      c.size * std::abs(step(3)), c.size * std::abs(step(5))});
   };
   recentre();
-  f.status = gauss_newton(n, 6, c.size, f.iterations, linearise, update);
+  Eigen::VectorXd scale(6);
+  scale << 1.0, 1.0, 1.0 / c.size, 1.0 / c.size, 1.0, 1.0 / c.size;
+  std::optional<Hold> hold = hold_for(limits, scale);
+  f.status = gauss_newton(n, 6, c.size, f.iterations, linearise, update, hold ? &*hold : nullptr);
+  f.held = hold ? hold->held : 0;
   if (f.status == ElementFitStatus::Degenerate || !(std::abs(half_angle) < 0.5 * std::numbers::pi)) {
     f.status = ElementFitStatus::Degenerate;
     return f;
@@ -202,7 +243,8 @@ ConeFit cone_from(const Centred& c, Vector3 axis, Point3 through, double radius,
 // The torus about the axis z through `centre` (free in x0, y0, z0; the axis tilted by (a, b) as the cylinder's):
 // with ρ = √(x² + y²), h = z and w = √((ρ − R)² + h²), the distance is w − r; its derivatives in
 // (x0, y0, z0, a, b, R, r) follow from ∂w/∂ρ = (ρ − R)/w, ∂w/∂h = h/w and ρ's and h's as for the cone.
-TorusFit torus_from(const Centred& c, Vector3 axis, Point3 centre_estimate, double radius, double minor) {
+TorusFit torus_from(const Centred& c, Vector3 axis, Point3 centre_estimate, double radius, double minor,
+                    const HoldPoorlyFixed& limits) {
   TorusFit f;
   const Eigen::Index n = static_cast<Eigen::Index>(c.p.size());
   Eigen::Matrix3d R;
@@ -229,7 +271,11 @@ TorusFit torus_from(const Centred& c, Vector3 axis, Point3 centre_estimate, doub
     return std::max({step.head<3>().cwiseAbs().maxCoeff(), std::abs(step(5)), std::abs(step(6)),
                      c.size * std::abs(step(3)), c.size * std::abs(step(4))});
   };
-  f.status = gauss_newton(n, 7, c.size, f.iterations, linearise, update);
+  Eigen::VectorXd scale(7);
+  scale << 1.0, 1.0, 1.0, 1.0 / c.size, 1.0 / c.size, 1.0, 1.0;
+  std::optional<Hold> hold = hold_for(limits, scale);
+  f.status = gauss_newton(n, 7, c.size, f.iterations, linearise, update, hold ? &*hold : nullptr);
+  f.held = hold ? hold->held : 0;
   if (f.status == ElementFitStatus::Degenerate || !(minor > 0.0)) {
     f.status = ElementFitStatus::Degenerate;
     return f;
@@ -335,18 +381,18 @@ CylinderFit fit_cylinder(std::span<const Point3> points) {
   return best;
 }
 
-ConeFit fit_cone(std::span<const Point3> points, const ConeFit& start) {
+ConeFit fit_cone(std::span<const Point3> points, const ConeFit& start, const HoldPoorlyFixed& limits) {
   ConeFit f;
   if (points.size() < 6 || !(start.axis.norm() > 0.0)) return f;
   const Centred c = centre(points);
-  return cone_from(c, start.axis.normalized(), start.axis_point - c.centroid, start.radius, start.half_angle);
+  return cone_from(c, start.axis.normalized(), start.axis_point - c.centroid, start.radius, start.half_angle, limits);
 }
 
-TorusFit fit_torus(std::span<const Point3> points, const TorusFit& start) {
+TorusFit fit_torus(std::span<const Point3> points, const TorusFit& start, const HoldPoorlyFixed& limits) {
   TorusFit f;
   if (points.size() < 7 || !(start.axis.norm() > 0.0)) return f;
   const Centred c = centre(points);
-  return torus_from(c, start.axis.normalized(), start.center - c.centroid, start.radius, start.minor_radius);
+  return torus_from(c, start.axis.normalized(), start.center - c.centroid, start.radius, start.minor_radius, limits);
 }
 
 double distance(const ConeFit& cone, const Point3& x) {

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -250,6 +251,84 @@ TEST(ElementFits, ConesAndToriThatThePointsDoNotFixAreDegenerate) {
   EXPECT_EQ(fit_torus(equator, torus).status, ElementFitStatus::Degenerate);
   EXPECT_EQ(fit_cone(std::vector<Point3>(ring.begin(), ring.begin() + 5), cone).status, ElementFitStatus::Degenerate);
   EXPECT_EQ(fit_torus(std::vector<Point3>(ring.begin(), ring.begin() + 6), torus).status, ElementFitStatus::Degenerate);
+}
+
+// Held at the start: the combinations the points do not fix stay as started, the rest is fitted (the least-squares
+// step of smallest size from the start, a closed form here), and the fit is OK where it was Degenerate.
+TEST(ElementFits, WhatThePointsDoNotFixIsHeldAtTheStart) {
+  const Frame f(Point3(5, 6, 7), Vector3(0, 0.3, 1));
+  std::vector<Point3> ring, equator;
+  for (int k = 0; k < 20; ++k) {
+    ring.push_back(on_cone(f, 10.0, 0.4, 0.3 * k, 0.0));
+    equator.push_back(on_torus(f, 30.0, 5.0, 0.3 * k, 0.0));
+  }
+  const HoldPoorlyFixed limits{.sigma = 0.002, .max_std = 0.025};
+  // The equator fixes the centre across the axis and R + r; not the centre along the axis, the tilt, nor R − r.
+  // Started with R 0.05 mm off, the smallest step that fits takes half of it from R and half from r.
+  const TorusFit torus = fit_torus(equator, {.center = f.c, .axis = f.a, .radius = 30.05, .minor_radius = 5.0}, limits);
+  ASSERT_EQ(torus.status, ElementFitStatus::OK);
+  EXPECT_EQ(torus.held, 4);
+  EXPECT_NEAR(torus.radius, 30.025, 1e-9);
+  EXPECT_NEAR(torus.minor_radius, 4.975, 1e-9);
+  EXPECT_LT((torus.center - f.c).norm(), 1e-9);
+  EXPECT_LT(angle(torus.axis, f.a), 1e-12);
+  for (const Point3& y : equator) EXPECT_NEAR(distance(torus, y), 0.0, 1e-9);
+  // One ring of a cone fixes its radius there, the axis's place and tilt together (one combination of each pair),
+  // not the angle: started 0.01 rad off, it stays there, and the radius at the ring is fitted. (The first step is
+  // taken where the start's radius is off by 0.05 mm, and there the angle and the radius are not quite apart: the
+  // angle moves by 1e-5 rad with it.)
+  const ConeFit cone = fit_cone(ring, {.axis_point = f.c, .axis = f.a, .radius = 10.05, .half_angle = 0.41}, limits);
+  ASSERT_EQ(cone.status, ElementFitStatus::OK);
+  EXPECT_EQ(cone.held, 3);
+  EXPECT_NEAR(cone.half_angle, 0.41, 2e-5);
+  const ConeFit exact = fit_cone(ring, {.axis_point = f.c, .axis = f.a, .radius = 10.0, .half_angle = 0.41}, limits);
+  ASSERT_EQ(exact.status, ElementFitStatus::OK);
+  EXPECT_NEAR(exact.half_angle, 0.41, 1e-12);
+  const double h = (f.c - cone.axis_point).dot(cone.axis);
+  EXPECT_NEAR(cone.radius + h * std::tan(cone.half_angle), 10.0, 1e-9);
+  for (const Point3& y : ring) EXPECT_NEAR(distance(cone, y), 0.0, 1e-9);
+  // Points that fix everything: held nothing, the same fit as without limits.
+  std::vector<Point3> tube;
+  for (int k = 0; k < 40; ++k) tube.push_back(on_torus(f, 30.0, 5.0, 0.15 * k, 0.37 * k));
+  const TorusFit start{.center = f.c + Vector3(0.1, 0, 0), .axis = f.a, .radius = 30.05, .minor_radius = 5.0};
+  const TorusFit held = fit_torus(tube, start, limits), free = fit_torus(tube, start);
+  ASSERT_EQ(held.status, ElementFitStatus::OK);
+  EXPECT_EQ(held.held, 0);
+  EXPECT_NEAR(held.radius, 30.0, 1e-9);
+  EXPECT_NEAR(held.minor_radius, free.minor_radius, 1e-12);
+}
+
+// Twelve touches on a short arc of a fillet, σ = 2 µm, over seeds: its radius and its centre's place trade, and
+// fitted free the radius wanders. Held, every fit is OK, its radius stays near the truth, and its surface passes
+// within a few σ of the true points.
+TEST(ElementFits, AShortArcOfAFilletHoldsItsRadiusAndFollowsItsPoints) {
+  const Frame f(Point3(-40, 20, 10), Vector3(0.1, -0.2, 1));
+  const double R = 20.0, r = 3.0, sigma = 0.002;
+  std::normal_distribution<double> noise(0.0, sigma);
+  std::uniform_real_distribution<double> t(0.0, 1.0);
+  double worst_radius = 0.0, worst_free_radius = 0.0, worst_distance = 0.0;
+  for (int seed = 1; seed <= 20; ++seed) {
+    std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
+    std::vector<Point3> truth, measured;
+    for (int k = 0; k < 12; ++k) {
+      const double u = 0.3 * t(rng);
+      const double v = 0.5 * t(rng);
+      truth.push_back(on_torus(f, R, r, u, v));
+      measured.push_back(truth.back() + simulation::draw_vector(noise, rng));
+    }
+    const TorusFit start{.center = f.c, .axis = f.a, .radius = R, .minor_radius = r};
+    const TorusFit held = fit_torus(measured, start, {.sigma = sigma, .max_std = 0.025});
+    ASSERT_EQ(held.status, ElementFitStatus::OK) << "seed " << seed;
+    EXPECT_GE(held.held, 1);
+    worst_radius = std::max(worst_radius, std::abs(held.radius - R));
+    for (const Point3& y : truth) worst_distance = std::max(worst_distance, std::abs(distance(held, y)));
+    const TorusFit free = fit_torus(measured, start);
+    if (free.status == ElementFitStatus::OK) worst_free_radius = std::max(worst_free_radius, std::abs(free.radius - R));
+  }
+  std::printf("largest radius error held %.4f mm, free %.4f mm; largest distance of a true point from the held fit "
+              "%.2f um\n", worst_radius, worst_free_radius, worst_distance * 1e3);
+  EXPECT_LT(worst_radius, 0.1);           // 4 of the fitted combinations' largest standard deviation
+  EXPECT_LT(worst_distance, 3.0 * sigma);
 }
 
 TEST(ElementFits, NoSmallChangeOfTheFittedConeOrTorusLowersTheSumOfSquares) {

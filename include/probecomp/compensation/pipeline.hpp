@@ -214,7 +214,9 @@ struct ElementFaceFit {
   double minor_radius = 0.0;        // torus: the tube's, mm
   double rms = 0.0;                 // of the points used, orthogonal to the element, mm
   int used = 0;                     // points used (the rest left out as outliers)
-  int parameters = 0;               // the element's: 3 plane, 4 sphere, 5 cylinder, 6 cone, 7 torus
+  int parameters = 0;               // fitted: 3 plane, 4 sphere, 5 cylinder, 6 cone, 7 torus, less `held`
+  int held = 0;                     // cone, torus: combinations of its parameters held at the nominal's, which the
+                                    // points fix too poorly (fitting::HoldPoorlyFixed)
 };
 
 struct FaceFit {

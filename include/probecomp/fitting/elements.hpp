@@ -55,6 +55,7 @@ struct ConeFit {
   double half_angle = 0.0;             // radians, in (−π/2, π/2)
   double rms = 0.0;
   int iterations = 0;
+  int held = 0;                        // combinations of the parameters held at the start's (HoldPoorlyFixed)
 };
 
 struct TorusFit {
@@ -65,6 +66,17 @@ struct TorusFit {
   double minor_radius = 0.0;        // the tube's
   double rms = 0.0;
   int iterations = 0;
+  int held = 0;                     // combinations of the parameters held at the start's (HoldPoorlyFixed)
+};
+
+// What a cone's or torus's points must fix for a combination of its parameters to be fitted, not held at the
+// start's value: its least-squares standard deviation, `sigma` over its singular value (parameters in mm, a tilt
+// times the points' size), at most `max_std` (mm). A few touches on a short arc of a fillet trade its major radius
+// for its centre's place; started from the nominal, that combination stays the nominal's, and the rest is fitted.
+// The default fits every parameter, and points that do not fix them all are Degenerate.
+struct HoldPoorlyFixed {
+  double sigma = 0.0;    // the points' noise along the normal, mm
+  double max_std = 0.0;  // mm
 };
 
 // At least 3 points not on one line.
@@ -76,8 +88,11 @@ struct TorusFit {
 [[nodiscard]] CylinderFit fit_cylinder(std::span<const Point3> points);
 // At least 6 and 7 points (their parameters), from `start` (its status, rms and iterations are not read).
 // Degenerate when the points do not fix the element: a band too narrow to tell a cone's angle from its radius.
-[[nodiscard]] ConeFit fit_cone(std::span<const Point3> points, const ConeFit& start);
-[[nodiscard]] TorusFit fit_torus(std::span<const Point3> points, const TorusFit& start);
+// With `limits`, a combination the points fix too poorly is held at the start's value (HoldPoorlyFixed); the fit is
+// then OK even where the points fix none (its `held` says how many).
+[[nodiscard]] ConeFit fit_cone(std::span<const Point3> points, const ConeFit& start, const HoldPoorlyFixed& limits = {});
+[[nodiscard]] TorusFit fit_torus(std::span<const Point3> points, const TorusFit& start,
+                                 const HoldPoorlyFixed& limits = {});
 
 // Signed orthogonal distances, mm: positive on the side away from the axis (cone) or the tube's centre circle
 // (torus). The cone's is that from its nappe the axis point is on.
