@@ -1,6 +1,9 @@
 #include "qif_characteristics.hpp"
 
+#include <algorithm>
+#include <functional>
 #include <initializer_list>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -55,6 +58,81 @@ const char* status(inspection::Decision d) {
   return "NOT_ANALYZED";
 }
 
+// The sections that follow `name` in QIFDocument's sequence (QIFDocument.xsd), for insert().
+constexpr std::initializer_list<const char*> kAfterDatumDefinitions = {
+    "DatumTargetDefinitions", "Transforms", "CoordinateSystems", "DatumReferenceFrames", "MeasurementResources",
+    "ThreadSpecifications", "Product", "Features", "FeatureZones", "Characteristics", "Plan", "Results", "Statistics",
+    "ManufacturingProcessTraceabilities", "Rules", "UserDataXML", "Signature"};
+constexpr std::initializer_list<const char*> kAfterDatumReferenceFrames = {
+    "MeasurementResources", "ThreadSpecifications", "Product", "Features", "FeatureZones", "Characteristics", "Plan",
+    "Results", "Statistics", "ManufacturingProcessTraceabilities", "Rules", "UserDataXML", "Signature"};
+
+const char* precedence(std::size_t k) {
+  static constexpr const char* kOrder[] = {"PRIMARY", "SECONDARY", "TERTIARY", "QUATERNARY", "QUINARY", "SENARY"};
+  return kOrder[std::min<std::size_t>(k, 5)];
+}
+
+// The datums the characteristics refer to (DatumDefinitions, one per label) and their datum reference frames
+// (DatumReferenceFrames, one per sequence of labels: "A|B|C"), with each datum's substitute feature as fitted (least
+// squares, or tangent: ONESIDED) where a frame was set up with it. Returns each frame's id by its key.
+std::map<std::string, std::string> add_datum_frames(pugi::xml_node root, const inspection::Inspection& inspection,
+                                                    const std::function<std::string()>& next) {
+  std::map<std::string, std::string> frame_ids;
+  std::map<std::string, std::string> datum_ids;
+  std::map<std::string, const inspection::DatumResult*> fitted;
+  for (const inspection::FrameDatum& d : inspection.datums) fitted.try_emplace(d.datum.name, &d.datum);
+  std::vector<const inspection::CharacteristicSpec*> framed;
+  for (const inspection::CharacteristicResult& c : inspection.characteristics) {
+    if (!c.spec.datums.empty()) framed.push_back(&c.spec);
+  }
+  if (framed.empty()) return frame_ids;
+
+  pugi::xml_node definitions = insert(root, "DatumDefinitions", kAfterDatumDefinitions);
+  for (const inspection::CharacteristicSpec* c : framed) {
+    for (const std::string& label : c->datums) {
+      if (datum_ids.contains(label)) continue;
+      const std::string id = next();
+      datum_ids[label] = id;
+      pugi::xml_node d = definitions.append_child("DatumDefinition");
+      d.append_attribute("id") = id.c_str();
+      if (const auto f = fitted.find(label); f != fitted.end()) {
+        std::string faces;
+        for (int face : f->second->faces) faces.append(faces.empty() ? "" : " ").append(std::to_string(face));
+        attributes(d, {{"probecomp:faces", faces}});
+      }
+      text(d, "DatumLabel", label);
+    }
+  }
+  definitions.prepend_attribute("n") = static_cast<int>(datum_ids.size());
+
+  pugi::xml_node frames = insert(root, "DatumReferenceFrames", kAfterDatumReferenceFrames);
+  for (const inspection::CharacteristicSpec* c : framed) {
+    std::string key;
+    for (const std::string& d : c->datums) key.append(key.empty() ? "" : "|").append(d);
+    if (frame_ids.contains(key)) continue;
+    const std::string id = next();
+    frame_ids[key] = id;
+    pugi::xml_node frame = frames.append_child("DatumReferenceFrame");
+    frame.append_attribute("id") = id.c_str();
+    pugi::xml_node datums = frame.append_child("Datums");
+    datums.append_attribute("n") = static_cast<int>(c->datums.size());
+    for (std::size_t k = 0; k < c->datums.size(); ++k) {
+      pugi::xml_node simple = datums.append_child("Datum").append_child("SimpleDatum");
+      text(simple, "DatumDefinitionId", datum_ids.at(c->datums[k]));
+      text(simple, "MaterialModifier", "NONE");  // regardless of feature size: the only one evaluated
+      text(simple, "ReferencedComponent", "NOMINAL");
+      if (const auto f = fitted.find(c->datums[k]); f != fitted.end()) {
+        text(simple.append_child("SubstituteFeatureAlgorithm"), "SubstituteFeatureAlgorithmEnum",
+             f->second->fit == inspection::DatumFit::Tangent ? "ONESIDED" : "LEASTSQUARES");
+      }
+      simple.parent().append_child("Precedence").append_child("PrecedenceEnum").text().set(precedence(k));
+    }
+    text(frame, "Name", key);
+  }
+  frames.prepend_attribute("n") = static_cast<int>(frame_ids.size());
+  return frame_ids;
+}
+
 }  // namespace
 
 void add_characteristics(std::string& xml, const inspection::Inspection& inspection, double scale) {
@@ -89,6 +167,8 @@ void add_characteristics(std::string& xml, const inspection::Inspection& inspect
   text(standard, "Designator", "1101");
   standards.attribute("n").set_value(standards.attribute("n").as_int() + 1);
 
+  const std::map<std::string, std::string> frame_ids = add_datum_frames(root, inspection, next);
+
   pugi::xml_node characteristics = insert(root, "Characteristics", {"Plan", "Results", "Statistics",
                                                                     "ManufacturingProcessTraceabilities", "Rules",
                                                                     "UserDataXML", "Signature"});
@@ -117,10 +197,11 @@ void add_characteristics(std::string& xml, const inspection::Inspection& inspect
 
     pugi::xml_node d = definitions.append_child("SurfaceProfileCharacteristicDefinition");
     d.append_attribute("id") = definition_id.c_str();
-    attributes(d, {{"probecomp:faces", faces}, {"probecomp:datums", frame}});
+    attributes(d, {{"probecomp:faces", faces}});
     text(d, "Name", c.spec.name);
     text(d, "ToleranceValue", length(c.spec.tolerance));
     text(d, "OuterDisposition", length(c.outside));
+    if (!frame.empty()) text(d, "DatumReferenceFrameId", frame_ids.at(frame));
 
     pugi::xml_node nominal = nominals.append_child("SurfaceProfileCharacteristicNominal");
     nominal.append_attribute("id") = nominal_id.c_str();

@@ -122,6 +122,26 @@ check "grep -q '<CharacteristicStatusEnum>PASS</CharacteristicStatusEnum>' '$W/j
 json_check "$W/judged.json" "abs(float(__import__('re').search(r'<SurfaceProfileCharacteristicMeasurement .*?<Value[^>]*>([^<]+)</Value>', open('$W/judged.qif').read(), 16).group(1)) - j['characteristics'][0]['value']) <= 5.1e-10 + 5e-9 * abs(j['characteristics'][0]['value']) and '<OuterDisposition>0.050000000</OuterDisposition>' in open('$W/judged.qif').read()" \
   "judged.qif: the value and the outer disposition as --json's" || fail=1
 
+# The datum reference frame A: one datum definition labelled A (its faces), one frame of it as primary, fitted by
+# least squares, and the two characteristics in it refer to that frame; P1 (form only) to none.
+check "python3 - '$W/judged.qif' <<'PY'
+import sys, xml.etree.ElementTree as ET
+q = '{http://qifstandards.org/xsd/qif3}'
+root = ET.parse(sys.argv[1]).getroot()
+datums = root.findall(q + 'DatumDefinitions/' + q + 'DatumDefinition')
+frames = root.findall(q + 'DatumReferenceFrames/' + q + 'DatumReferenceFrame')
+assert len(datums) == 1 and datums[0].findtext(q + 'DatumLabel') == 'A', 'one datum A'
+assert datums[0].find(q + 'Attributes/' + q + 'AttributeStr').get('value') == '0', 'datum A on face 0'
+assert len(frames) == 1 and frames[0].findtext(q + 'Name') == 'A', 'one frame A'
+simple = frames[0].find(q + 'Datums/' + q + 'Datum/' + q + 'SimpleDatum')
+assert simple.findtext(q + 'DatumDefinitionId') == datums[0].get('id')
+assert simple.findtext(q + 'SubstituteFeatureAlgorithm/' + q + 'SubstituteFeatureAlgorithmEnum') == 'LEASTSQUARES'
+assert frames[0].findtext(q + 'Datums/' + q + 'Datum/' + q + 'Precedence/' + q + 'PrecedenceEnum') == 'PRIMARY'
+refs = {d.findtext(q + 'Name'): d.findtext(q + 'DatumReferenceFrameId')
+        for d in root.iter(q + 'SurfaceProfileCharacteristicDefinition')}
+assert refs == {'P1': None, 'P2': frames[0].get('id'), 'P3': frames[0].get('id')}, refs
+PY" "judged.qif: datum A, its frame, and the characteristics that refer to it"
+
 # Bad inputs: one line naming the file and the line, a non-zero exit, no output.
 printf 'x,y,z\n1,2,3\n' >"$W/notxml.qif"
 expect_error "notxml.qif:2: not XML" "$W/o1.csv" "$P" convert "$W/notxml.qif" "$W/o1.csv"
