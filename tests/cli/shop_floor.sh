@@ -4,9 +4,10 @@
 # a rough alignment several mm and ~10° off, one beyond reach of the coarse alignment (refused, then done with
 # --initial-transform), and points that fix only some motions (reported).
 # Usage: shop_floor.sh PROBECOMP CAD_DIR WORK_DIR [light]
-# light (the sanitizer build, about twenty times slower): the cases but the rough alignment, the impeller and surf128
-# (the material side decided from the data: MaterialSide.* there), on fewer points (20 faces at a 3 mm spacing), for
-# memory and undefined behaviour; the figures and outcomes, which depend on the points, are held by the Release run.
+# light (the sanitizer build, about twenty times slower): the cases but the partial coverage, the rough alignment, the
+# impeller and surf128 (the material side decided from the data: MaterialSide.* there), on fewer points (20 faces at a
+# 3 mm spacing), for memory and undefined behaviour; the figures and outcomes, which depend on the points, are held by
+# the Release run.
 set -u
 P=$1; CAD=$2; W=$3; LIGHT=${4:-}
 if [ "$LIGHT" = light ]; then FACES=0-20; SPACING=3; else FACES=0-40; SPACING=2; fi
@@ -48,22 +49,25 @@ simulate() {  # DIR MISALIGN
 }
 
 # 1. Points on 41 of the die-cast part's 232 faces, 0.3 mm and 1° off: registered to the faces they touch.
-simulate "$W/partial" 0.3,0.2,-0.1,1,0.5,0
-"$P" compensate --cad "$HPDC" --points "$W/partial/raw.csv" --probe-radius 1 --output "$W/partial/out.csv" \
-  --json "$W/partial/out.json" --quiet 2>"$W/partial/err" || { echo "FAIL: partial coverage"; fail=1; }
-check_result "ok_within '$W/partial' 1 5" "partial coverage: ok rows within std 1 um, max 5 um of the truth"
-# Item 4: tips that touched a face's edge, offset towards it, and the faces too small for a fit, offset along the
-# nominal normal. Before trims were closed across their pcurves' gaps (a phantom face beyond the trim along a
-# domain edge), edge rows had std 26 um, max 220 um here.
-check_result "rows_within '$W/partial' edge 4 12" "partial coverage: edge rows within std 4 um, max 12 um"
-check_result "rows_within '$W/partial' few-points 4 12" "partial coverage: few-points rows within std 4 um, max 12 um"
-json_check_result "$W/partial/out.json" "j['registration']['starts'] == 1" "partial coverage: registered from the given start"
-# Faces too small for their points' control net say so, with what they would need (issue 20, item 5).
-check_result "grep -q 'warning: [0-9]* faces with points were not fitted; .*: face [0-9]*, [0-9]* points off the edges for [0-9]* control points ([0-9]* needed)' '$W/partial/err'" \
-  "partial coverage: unfitted faces and why on standard error"
-json_check_result "$W/partial/out.json" \
-  "any(not f['fitted'] and f['counts']['ok'] == 0 and f['counts']['outlier'] == 0 and f['counts']['few-points'] > 0 and f['stop_reason'].startswith('not fitted: ') and 'points off the edges for' in f['stop_reason'] for f in j['faces'])" \
-  "partial coverage: an unfitted face's counts by status and its reason in the JSON"
+# (Not in the light run, where its checks are not made: the 3 mm stylus below runs the same code on the same faces.)
+if [ "$LIGHT" != light ]; then
+  simulate "$W/partial" 0.3,0.2,-0.1,1,0.5,0
+  "$P" compensate --cad "$HPDC" --points "$W/partial/raw.csv" --probe-radius 1 --output "$W/partial/out.csv" \
+    --json "$W/partial/out.json" --quiet 2>"$W/partial/err" || { echo "FAIL: partial coverage"; fail=1; }
+  check_result "ok_within '$W/partial' 1 5" "partial coverage: ok rows within std 1 um, max 5 um of the truth"
+  # Item 4: tips that touched a face's edge, offset towards it, and the faces too small for a fit, offset along the
+  # nominal normal. Before trims were closed across their pcurves' gaps (a phantom face beyond the trim along a
+  # domain edge), edge rows had std 26 um, max 220 um here.
+  check_result "rows_within '$W/partial' edge 4 12" "partial coverage: edge rows within std 4 um, max 12 um"
+  check_result "rows_within '$W/partial' few-points 4 12" "partial coverage: few-points rows within std 4 um, max 12 um"
+  json_check_result "$W/partial/out.json" "j['registration']['starts'] == 1" "partial coverage: registered from the given start"
+  # Faces too small for their points' control net say so, with what they would need (issue 20, item 5).
+  check_result "grep -q 'warning: [0-9]* faces with points were not fitted; .*: face [0-9]*, [0-9]* points off the edges for [0-9]* control points ([0-9]* needed)' '$W/partial/err'" \
+    "partial coverage: unfitted faces and why on standard error"
+  json_check_result "$W/partial/out.json" \
+    "any(not f['fitted'] and f['counts']['ok'] == 0 and f['counts']['outlier'] == 0 and f['counts']['few-points'] > 0 and f['stop_reason'].startswith('not fitted: ') and 'points off the edges for' in f['stop_reason'] for f in j['faces'])" \
+    "partial coverage: an unfitted face's counts by status and its reason in the JSON"
+fi
 
 # Item 4 with a 3 mm stylus, whose tip cannot reach into the part's 2 mm fillets: it sits against both walls
 # there (double-contact), and many touches land on edges. Every such row is compensated from the nominal part's
