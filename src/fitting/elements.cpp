@@ -55,7 +55,7 @@ ElementFitStatus gauss_newton(Eigen::Index n, Eigen::Index parameters, double si
       const Eigen::VectorXd& s = svd.singularValues();
       // Rounding's floor as well: a combination the points do not fix at all (a torus's equator) is held too.
       const double floor = std::max(hold->min_singular, 1e-12 * s(0));
-      Eigen::VectorXd within = Eigen::VectorXd::Zero(parameters);
+      Eigen::VectorXd within = Eigen::VectorXd::Zero(s.size());
       hold->held = 0;
       for (Eigen::Index i = 0; i < s.size(); ++i) {
         if (s(i) > floor) {

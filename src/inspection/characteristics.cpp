@@ -271,7 +271,9 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
       outside_surely = outside_surely || d - U > c.outside || d + U < c.outside - s.tolerance;
       const bool straddles = (d - U < c.outside && d + U > c.outside) ||
                              (d - U < c.outside - s.tolerance && d + U > c.outside - s.tolerance);
-      if (straddles) c.undecided.push_back(row[static_cast<std::size_t>(fit.used[static_cast<std::size_t>(r)])]);
+      const std::size_t at = row[static_cast<std::size_t>(fit.used[static_cast<std::size_t>(r)])];
+      if (straddles) c.undecided.push_back(at);
+      c.judged.push_back({.row = at, .deviation = d, .U = U});
     }
     if (c.points < needed) {
       c.too_few_points = true;

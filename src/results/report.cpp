@@ -181,6 +181,27 @@ std::string view_json(const compensation::CompensationResult& r, const ReportCon
     for (const Point3& q : l) coord(line, q);
     lines.push_back(line);
   }
+  // Each evaluated characteristic's drawn points: their place in the view's arrays, deviation in its frame and U (µm),
+  // and its zone's limits (µm), for colouring by a chosen characteristic.
+  Json characteristics = Json::array();
+  if (c.inspection != nullptr) {
+    for (const inspection::CharacteristicResult& ch : c.inspection->characteristics) {
+      if (ch.decision == inspection::Decision::NotEvaluated) continue;
+      Json at = Json::array(), dev = Json::array(), U = Json::array();
+      for (const inspection::JudgedPoint& j : ch.judged) {
+        const auto it = std::lower_bound(shown.begin(), shown.end(), j.row);
+        if (it == shown.end() || *it != j.row) continue;
+        at.push_back(it - shown.begin());
+        dev.push_back(micro(j.deviation));
+        U.push_back(micro(j.U));
+      }
+      characteristics.push_back({{"name", ch.spec.name},
+                                 {"zone", {micro(ch.outside - ch.spec.tolerance), micro(ch.outside)}},
+                                 {"k", at},
+                                 {"d", dev},
+                                 {"U", U}});
+    }
+  }
   const Json view = {{"total", n},
                      {"origin", {json_fixed(origin.x(), 9), json_fixed(origin.y(), 9), json_fixed(origin.z(), 9)}},
                      {"p", p},
@@ -193,8 +214,27 @@ std::string view_json(const compensation::CompensationResult& r, const ReportCon
                      {"statuses", statuses},
                      {"status_counts", status_counts},
                      {"worst", labelled},
-                     {"lines", lines}};
-  return json_text(view, -1);
+                     {"lines", lines},
+                     {"characteristics", characteristics}};
+  // Inside <script>, "</script>" or "<!--" in a name (a characteristic's, from the specification or the CAD file)
+  // would end or upset the element: every '<' as its JSON escape, which only strings hold.
+  std::string text = json_text(view, -1), safe;
+  for (char ch : text) safe += ch == '<' ? std::string("\\u003c") : std::string(1, ch);
+  return safe;
+}
+
+// The view's "characteristic" colouring and its choice among the evaluated ones (in their order); nothing without any.
+std::string characteristic_choice(const inspection::Inspection* in) {
+  if (in == nullptr) return {};
+  std::string options;
+  int index = 0;
+  for (const inspection::CharacteristicResult& ch : in->characteristics) {
+    if (ch.decision == inspection::Decision::NotEvaluated) continue;
+    options += "<option value=\"" + std::to_string(index++) + "\">" + xml_escape(ch.spec.name) + "</option>";
+  }
+  if (options.empty()) return {};
+  return " <label><input type=\"radio\" name=\"colour\" value=\"characteristic\"> deviation in the frame and zone "
+         "of</label> <select id=\"view-characteristic\">" + options + "</select>";
 }
 
 std::string joined(const std::vector<int>& v) {
@@ -334,7 +374,8 @@ std::string html_report(const compensation::CompensationResult& r, const ReportC
        "<p>Colour by <label><input type=\"radio\" name=\"colour\" value=\"deviation\" checked> deviation</label> "
        "<label><input type=\"radio\" name=\"colour\" value=\"status\"> status</label> "
        "<label><input type=\"radio\" name=\"colour\" value=\"u\""
-    << (any_u ? "" : " disabled") << "> uncertainty u</label></p>\n"
+    << (any_u ? "" : " disabled") << "> uncertainty u</label>"
+    << characteristic_choice(c.inspection) << "</p>\n"
     << "<div id=\"view-box\"><canvas id=\"view\" width=\"1000\" height=\"600\"></canvas></div>\n"
        "<p id=\"view-info\" class=\"note\">&nbsp;</p>\n"
        "<script type=\"application/json\" id=\"view-data\">"

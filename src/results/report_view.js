@@ -1,5 +1,5 @@
-// The report's 3-D view (io/report.cpp inlines this file): the compensated points coloured by deviation, status or
-// uncertainty over the registered nominal faces' outlines, drawn with a depth buffer on a 2-D canvas (no WebGL, no
+// The report's 3-D view (io/report.cpp inlines this file): the compensated points coloured by deviation, status,
+// uncertainty or a chosen characteristic's deviation in its frame and zone, over the registered nominal faces' outlines, drawn with a depth buffer on a 2-D canvas (no WebGL, no
 // library: it opens offline and in any browser). Drag to rotate, shift-drag or right-drag to pan, wheel to zoom,
 // double-click to reset; hovering a point names its row.
 (function () {
@@ -28,8 +28,25 @@
   const css = (c) => "rgb(" + c[0] + "," + c[1] + "," + c[2] + ")";
 
   let mode = "deviation";
+  // The chosen characteristic, and each drawn point's place in its arrays (-1: not one of its points).
+  let chosen = null;
+  const onChosen = new Int32Array(n);
+  function choose(i) {
+    chosen = data.characteristics[i] || null;
+    onChosen.fill(-1);
+    if (chosen) chosen.k.forEach((k, j) => { onChosen[k] = j; });
+  }
   function colour(k) {
     if (mode === "status") return STATUS[data.s[k]] || NONE;
+    if (mode === "characteristic") {
+      // Its zone's limits at the colour bar's ends; beyond them the darkest ends.
+      const j = chosen ? onChosen[k] : -1;
+      if (j < 0) return NONE;
+      const d = chosen.d[j], [lo, hi] = chosen.zone;
+      if (d < lo) return BELOW;
+      if (d > hi) return ABOVE;
+      return ramp(RDBU, (d - lo) / (hi - lo));
+    }
     if (mode === "u") return data.u[k] === null ? NONE : ramp(VIRIDIS, data.u[k] / data.u_max);
     const d = data.d[k];
     if (d === null || data.s[k] !== 0) return NONE;
@@ -160,7 +177,7 @@
       });
       return;
     }
-    const [lo, hi] = mode === "u" ? [0, data.u_max] : data.dev_range;
+    const [lo, hi] = mode === "u" ? [0, data.u_max] : mode === "characteristic" && chosen ? chosen.zone : data.dev_range;
     for (let y = 0; y < height; ++y) {
       const t = 1 - y / (height - 1);
       ctx.fillStyle = css(mode === "u" ? ramp(VIRIDIS, t) : ramp(RDBU, t));
@@ -169,12 +186,14 @@
     ctx.strokeStyle = "#444";
     ctx.strokeRect(x, top, 18, height);
     ctx.fillStyle = "#111";
-    ctx.fillText(mode === "u" ? "u (\u00b5m)" : "deviation (\u00b5m)", x - 40, top - 12);
+    const title = mode === "u" ? "u (\u00b5m)" : mode === "characteristic" && chosen ? chosen.name + ": zone (\u00b5m)"
+                                                                                   : "deviation (\u00b5m)";
+    ctx.fillText(title, x - 40, top - 12);
     for (let i = 0; i <= 4; ++i) {
       const v = lo + (hi - lo) * (1 - i / 4);
       ctx.fillText(v.toFixed(hi - lo < 4 ? 2 : 1), x + 24, top + (height - 1) * i / 4 + 4);
     }
-    if (mode === "deviation") {
+    if (mode === "deviation" || mode === "characteristic") {
       ctx.fillStyle = css(ABOVE);
       ctx.fillRect(x, top - 8, 18, 6);
       ctx.fillStyle = css(BELOW);
@@ -182,7 +201,7 @@
       ctx.fillStyle = css(NONE);
       ctx.fillRect(x, top + height + 16, 18, 10);
       ctx.fillStyle = "#111";
-      ctx.fillText("not ok", x + 24, top + height + 25);
+      ctx.fillText(mode === "deviation" ? "not ok" : "not judged", x + 24, top + height + 25);
     }
   }
 
@@ -253,12 +272,24 @@
     info.textContent = best < 0 ? "\u00a0" :
       "row " + data.row[best] + ": " + data.statuses[data.s[best]] +
       (data.d[best] === null ? "" : ", deviation " + data.d[best].toFixed(2) + " \u00b5m") +
-      (data.u[best] === null ? "" : ", u " + data.u[best].toFixed(2) + " \u00b5m");
+      (data.u[best] === null ? "" : ", u " + data.u[best].toFixed(2) + " \u00b5m") +
+      (mode === "characteristic" && chosen && onChosen[best] >= 0
+        ? "; " + chosen.name + ": " + chosen.d[onChosen[best]].toFixed(2) + " \u00b1 " + chosen.U[onChosen[best]].toFixed(2) +
+          " \u00b5m in its frame"
+        : "");
   });
   for (const input of document.querySelectorAll("input[name=colour]")) {
     input.addEventListener("change", () => {
       mode = input.value;
       draw();
+    });
+  }
+  const select = document.getElementById("view-characteristic");
+  if (select) {
+    choose(Number(select.value));
+    select.addEventListener("change", () => {
+      choose(Number(select.value));
+      if (mode === "characteristic") draw();
     });
   }
   window.addEventListener("resize", resize);

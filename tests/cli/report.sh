@@ -21,8 +21,11 @@ command -v chromium >/dev/null || { echo "FAIL: chromium is not installed (scrip
 demo_files "$W/demo" || { echo "FAIL: demo"; fail=1; }
 echo "the demo's report:"
 $CHECK "$W/demo/report.html" - --chromium --expect-tolerance --expect-difference || fail=1
+# With two characteristics (the panel's form, and its profile to itself as datum A), which the view colours by too.
+printf '{"datums": {"A": {"faces": [0]}}, "characteristics": [{"name": "form", "faces": [0], "tolerance": 0.05},
+  {"name": "to A", "faces": [0], "tolerance": 0.02, "outside": 0.005, "datums": ["A"]}]}' >"$W/spec.json"
 "$P" compensate --cad "$W/demo/nominal.igs" --points "$W/demo/raw.csv" --probe-radius 1 --tolerance -0.05,0.05 \
-  --report "$W/demo.html" --json "$W/demo.json" --output "$W/demo_out.csv" --quiet \
+  --characteristics "$W/spec.json" --report "$W/demo.html" --json "$W/demo.json" --output "$W/demo_out.csv" --quiet \
   || { echo "FAIL: compensate the demo with --report"; fail=1; }
 echo "compensate --report on the demo's files:"
 $CHECK "$W/demo.html" "$W/demo.json" --chromium --expect-tolerance --expect-difference || fail=1

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 
@@ -84,6 +86,34 @@ TEST(Characteristics, AFlatnessIsTheTwistsHalfHeightAndItsDecisionFollowsTheZone
   EXPECT_EQ(evaluate(flatness(0.008), m.nominal, m.result).characteristics.at(0).decision, Decision::DoesNotConform);
   // A zone exactly the measured value: its extreme point sits on the limit, its ±U across it.
   EXPECT_EQ(evaluate(flatness(wide.value), m.nominal, m.result).characteristics.at(0).decision, Decision::Indeterminate);
+}
+
+// Each point as the flatness judged it: its deviation from the best-fitted plane is the closed form at its place.
+TEST(Characteristics, EachPointsDeviationIsTheClosedFormAtItsPlace) {
+  constexpr double h = 0.04;
+  const Measured m = measure(h);
+  const CharacteristicResult f = evaluate(flatness(0.03), m.nominal, m.result).characteristics.at(0);
+  ASSERT_EQ(f.judged.size(), 63u);
+  double worst = 0.0, lowest = 1.0, highest = -1.0;
+  for (std::size_t n = 0; n < f.judged.size(); ++n) {
+    const JudgedPoint& p = f.judged[n];
+    if (n > 0) EXPECT_GT(p.row, f.judged[n - 1].row);
+    const double s = 0.1 + 0.8 * static_cast<double>(p.row / 7) / 8.0, t = 0.1 + 0.8 * static_cast<double>(p.row % 7) / 6.0;
+    worst = std::max(worst, std::abs(p.deviation - h * (s - 0.5) * (t - 0.5)));
+    EXPECT_GT(p.U, 0.0);
+    lowest = std::min(lowest, p.deviation);
+    highest = std::max(highest, p.deviation);
+  }
+  std::printf("largest |deviation - h(s - 1/2)(t - 1/2)| %.3f um\n", worst * 1e3);
+  EXPECT_LT(worst, 0.001);
+  EXPECT_EQ(lowest, f.min);
+  EXPECT_EQ(highest, f.max);
+  // The point farthest from the zone's middle (0 here) sets the value, and its U is k times the value's u / 2.
+  const auto far = std::max_element(f.judged.begin(), f.judged.end(), [](const JudgedPoint& a, const JudgedPoint& b) {
+    return std::abs(a.deviation) < std::abs(b.deviation);
+  });
+  EXPECT_DOUBLE_EQ(2.0 * std::abs(far->deviation), f.value);
+  EXPECT_DOUBLE_EQ(far->U, f.coverage * f.u / 2.0);
 }
 
 TEST(Characteristics, WithADatumWithoutFacesOrTooFewPointsTheyAreNotEvaluatedWithTheReason) {

@@ -231,6 +231,42 @@ TEST(DatumFrame, AHoleAsSecondaryDatumCentresItsAxisWhateverItsSize) {
   EXPECT_EQ(alone.fixed(), 4);
 }
 
+// A cone as the primary datum (a countersink): it fixes its axis and its place along it, five motions, not the turn
+// about its axis. The pocket is 0.02, −0.01 and 0.015 mm off in x, y and z: in its frame the part moves back by that,
+// so the flat top (outward +z) is 0.015 mm inside the material everywhere, and the cone's points lie on the nominal.
+TEST(DatumFrame, ACountersinkAsDatumFixesFiveMotionsAndCentresThePart) {
+  const cad::Model model = testing::block_with_countersink();
+  const auto radius_at = [](double z) { return 4.0 + (z - 12.0) * 5.0 / 9.0; };
+  const int cone = testing::face_through(model, Point3(30.0 + radius_at(16.0), 20.0, 16.0));
+  const int top = testing::face_through(model, Point3(5, 5, 20));
+  const Vector3 off(0.02, -0.01, 0.015);
+  compensation::CompensationResult r;
+  r.registration.transform = registered_pose();
+  for (double z = 13; z <= 19; z += 2) {
+    for (int k = 0; k < 12; ++k) {
+      const double phi = 2 * M_PI * k / 12;
+      add(r, Point3(30, 20, z) + radius_at(z) * Vector3(std::cos(phi), std::sin(phi), 0) + off, cone, 0.001);
+    }
+  }
+  for (double x = 5; x <= 55; x += 5) {
+    for (double y = 5; y <= 35; y += 5) {
+      if (std::hypot(x - 30, y - 20) > 10) add(r, Point3(x, y, 20), top, 0.001);
+    }
+  }
+  const DatumFrame frame = establish_frame({{"K", {cone}}}, model, r);
+  ASSERT_TRUE(frame.ok()) << frame.reason;
+  EXPECT_EQ(frame.fixed(), 5);
+  EXPECT_FALSE(frame.datums.at(0).size_change.has_value());  // a cone's size is its place along its axis
+  EXPECT_LT(frame.datums.at(0).rms, 1e-8);
+  Specification spec;
+  spec.datums = {{"K", {cone}}};
+  spec.characteristics = {{.name = "top", .faces = {top}, .tolerance = 0.1, .outside = {}, .datums = {"K"}}};
+  const CharacteristicResult c = evaluate(spec, model, r).characteristics.at(0);
+  ASSERT_NE(c.decision, Decision::NotEvaluated) << c.reason;
+  EXPECT_NEAR(c.min, -0.015, 1e-7);
+  EXPECT_NEAR(c.max, -0.015, 1e-7);
+}
+
 TEST(DatumFrame, ThreeTwoOnePointsFixEveryMotion) {
   // The paper's step 1: three points on the bottom, two on the front, one on the left end. The actual part's bottom
   // is 0.01 mm up, its front 0.02 mm back (−y) and its left end 0.005 mm in (+x): the frame shifts it by

@@ -8,11 +8,13 @@
 1. Self-contained: no element loads anything (no src=, href=, url(), @import, srcset, <link>, <iframe>, ...), and no
    address outside the page appears but the SVG namespace.
 2. Its numbers are the JSON's: the counts by status, the trusted points' deviation (points, mean, std, min, max,
-   out of tolerance), each face's row, the registration's transform.
+   out of tolerance), each face's row, the registration's transform, the view's characteristics (zones; with every
+   point drawn, their points, min and max).
 3. With --chromium: rendered by headless Chromium, offline (every host unresolvable, no proxy reachable), with no
    console message at all (the page logs nothing, so any message is an error or a failed load); the 3-D view has
    drawn every point it holds (the page marks <body data-drawn-points>); a drag turns it, the wheel zooms it and
-   colouring by status recolours it (each changes the canvas); a screenshot of the view is not blank.
+   colouring by status (and by a characteristic, where it has them) recolours it (each changes the canvas); a
+   screenshot of the view is not blank.
 Prints what it checked; exits 1 on the first failure.
 """
 import html.parser
@@ -145,6 +147,24 @@ def check_numbers(page, stats, expect_tolerance):
             fail("face %s: the report says fitted as %s, the JSON %s" % (f["face"], fitted_as, f.get("fitted_as")))
     ok("%d face rows equal the JSON's faces" % len(rows))
 
+    # Each evaluated characteristic's points in the view: its zone the JSON's, and with every point drawn, one per
+    # point it used, their deviations (µm, to 0.01) spanning the JSON's min and max.
+    judged = [c for c in stats.get("characteristics", []) if c["decision"] != "not-evaluated"]
+    view = page.view_data.get("characteristics", [])
+    if [c["name"] for c in judged] != [v["name"] for v in view]:
+        fail("the view colours by %s, the JSON evaluated %s" % ([v["name"] for v in view], [c["name"] for c in judged]))
+    every_point = len(page.view_data["s"]) == page.view_data["total"]
+    for c, v in zip(judged, view):
+        zone = [1000 * (c["outside"] - c["tolerance"]), 1000 * c["outside"]]
+        if any(abs(a - b) > 0.0051 for a, b in zip(v["zone"], zone)) or not len(v["k"]) == len(v["d"]) == len(v["U"]):
+            fail("characteristic %s in the view: zone %s against the JSON's %s" % (c["name"], v["zone"], zone))
+        if every_point and (len(v["k"]) != c["points"] or abs(min(v["d"]) - 1000 * c["min"]) > 0.0051
+                            or abs(max(v["d"]) - 1000 * c["max"]) > 0.0051):
+            fail("characteristic %s in the view: %d points from %s to %s um against the JSON's %d from %s to %s mm"
+                 % (c["name"], len(v["k"]), min(v["d"]), max(v["d"]), c["points"], c["min"], c["max"]))
+    if view:
+        ok("the view's %d characteristics have the JSON's zones%s" % (len(view), ", points, min and max" if every_point else ""))
+
     matrix = [float(v) for row in page.tables["transform"] for v in row]
     want = [v for row in stats["transform"] for v in row]
     for a, b in zip(matrix, want):
@@ -218,7 +238,7 @@ def check_in_chromium(report, page):
     ok("rendered in headless Chromium offline with no console message; the 3-D view drew its %d points" % held)
 
     shot = os.path.join(work, "view.png")
-    run, console = chromium(["--window-size=1000,1300", "--screenshot=" + shot, url], work)
+    run, console = chromium(["--window-size=1000,2400", "--screenshot=" + shot, url], work)
     if run.returncode != 0 or not os.path.exists(shot):
         fail("chromium --screenshot failed: %s" % run.stderr[-500:])
     if console:
@@ -270,6 +290,11 @@ window.addEventListener("load", () => {
       marks.zoomed = changed();
       document.querySelector("input[name=colour][value=status]").click();
       marks.statusColours = changed();
+      const chosen = document.querySelector("input[name=colour][value=characteristic]");
+      if (chosen) {
+        chosen.click();
+        marks.characteristicColours = changed();
+      }
       marks.probed = "yes";
     });
   });
@@ -281,10 +306,14 @@ window.addEventListener("load", () => {
     run, console = chromium(["--virtual-time-budget=5000", "--dump-dom", "file://" + copy], work)
     if console:
         fail("the browser's console while turning, zooming and recolouring: " + " | ".join(console[:5]))
-    marks = dict(re.findall(r'data-(turned|zoomed|status-colours|probed)="([a-z]+)"', run.stdout))
-    if marks != {"turned": "true", "zoomed": "true", "status-colours": "true", "probed": "yes"}:
-        fail("the 3-D view did not answer a drag, a wheel turn and colouring by status: %s" % marks)
-    ok("the 3-D view turns on a drag, zooms on the wheel and recolours by status")
+    marks = dict(re.findall(r'data-(turned|zoomed|status-colours|characteristic-colours|probed)="([a-z]+)"', run.stdout))
+    want = {"turned": "true", "zoomed": "true", "status-colours": "true", "probed": "yes"}
+    if page.view_data.get("characteristics"):
+        want["characteristic-colours"] = "true"
+    if marks != want:
+        fail("the 3-D view did not answer a drag, a wheel turn and colouring by status (and characteristic): %s" % marks)
+    ok("the 3-D view turns on a drag, zooms on the wheel and recolours by status%s"
+       % (" and by characteristic" if "characteristic-colours" in want else ""))
 
 
 def main():

@@ -177,6 +177,13 @@ TEST(HtmlReport, CharacteristicsAndDatumsHaveTheirTablesWithTheDecisions) {
   EXPECT_NE(html.find("<td class=\"l\">A</td><td>A|B</td><td class=\"l\">tangent</td><td>1</td><td>12</td><td>3</td>"),
             std::string::npos);
   EXPECT_NE(html.find("in datum frame A|B."), std::string::npos);
+  // The view colours by the evaluated one (its zone in µm), chosen by name; a '<' in the view's JSON is escaped, so
+  // that no name can end its <script>.
+  EXPECT_NE(html.find("<select id=\"view-characteristic\"><option value=\"0\">P&lt;1&gt;</option></select>"),
+            std::string::npos);
+  EXPECT_NE(html.find("\"characteristics\":[{\"name\":\"P\\u003c1>\",\"zone\":[-250.0,250.0],\"k\":[],\"d\":[],\"U\":[]}]"),
+            std::string::npos);
+  EXPECT_EQ(html.find("\"name\":\"F\""), std::string::npos);
   // Without characteristics, no such section.
   EXPECT_EQ(html_report(r, ReportContext{}).find("id=\"characteristics\""), std::string::npos);
 }

@@ -5,6 +5,7 @@
 #include <BRepFilletAPI_MakeFillet.hxx>
 #include <BRep_Tool.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCone.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <Geom_Curve.hxx>
 #include <IFSelect_ReturnStatus.hxx>
@@ -77,6 +78,14 @@ cad::Model block_with_hole() {
   BRepAlgoAPI_Cut cut(box, pin);
   if (!cut.IsDone()) throw std::runtime_error("OpenCASCADE could not cut the hole");
   return through_step(cut.Shape(), "block_with_hole");
+}
+
+cad::Model block_with_countersink() {
+  const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), 60, 40, 20).Shape();
+  const TopoDS_Shape cone = BRepPrimAPI_MakeCone(gp_Ax2(gp_Pnt(30, 20, 12), gp_Dir(0, 0, 1)), 4, 9, 9).Shape();
+  BRepAlgoAPI_Cut cut(box, cone);
+  if (!cut.IsDone()) throw std::runtime_error("OpenCASCADE could not cut the countersink");
+  return through_step(cut.Shape(), "block_with_countersink");
 }
 
 cad::Model block_with_pin() {

@@ -9,6 +9,10 @@ namespace probecomp::testing {
 // A 60 × 40 × 20 mm block from the origin along +x, +y, +z, with a through hole of radius 5 along z at (40, 20).
 [[nodiscard]] cad::Model block_with_hole();
 
+// A 60 × 40 × 20 mm block from the origin with a conical pocket (a countersink's shape) about the vertical through
+// (30, 20): radius 4 at its flat floor z = 12, widening at 29.05° (tan = 5/9) to radius 9 at z = 21, above the top.
+[[nodiscard]] cad::Model block_with_countersink();
+
 // A 40 × 40 × 10 mm block from the origin with a pin of radius 4 standing 12 mm on its top at (20, 20).
 [[nodiscard]] cad::Model block_with_pin();
 

@@ -4,6 +4,7 @@
 // Each is judged in its datum reference frame (datum_frame.hpp); motions its datums leave free, all six without
 // datums, are best-fitted to its own points (least squares) first.
 
+#include <cstddef>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -48,6 +49,13 @@ struct Specification {
 [[nodiscard]] Specification from_pmi(const cad::Pmi& pmi, int& skipped);
 
 enum class Decision { Conforms, DoesNotConform, Indeterminate, NotEvaluated };
+
+// A trusted point as its characteristic judged it (the report's view colours by these).
+struct JudgedPoint {
+  std::size_t row = 0;     // in the compensation result
+  double deviation = 0.0;  // signed, in the characteristic's frame after its best fit, mm
+  double U = 0.0;          // k·u, its own and its datums' share, mm
+};
 [[nodiscard]] const char* to_string(Decision d);  // "conforms", "does-not-conform", ...
 
 struct CharacteristicResult {
@@ -64,6 +72,7 @@ struct CharacteristicResult {
   std::string reason;    // why not evaluated
   bool too_few_points = false;  // not evaluated for want of trusted points on its faces (more would decide it)
   std::vector<std::size_t> undecided;  // rows of the result whose d ± U crosses a limit of the zone: to measure again
+  std::vector<JudgedPoint> judged;     // every point it used, by ascending row (24 bytes each)
 };
 
 // One datum as a frame fitted it.
