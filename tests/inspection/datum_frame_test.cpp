@@ -267,6 +267,37 @@ TEST(DatumFrame, ACountersinkAsDatumFixesFiveMotionsAndCentresThePart) {
   EXPECT_NEAR(c.max, -0.015, 1e-7);
 }
 
+// A torus as the primary datum (a boss's rounded top edge, R = 13, r = 12 about z at height 18): as the cone, it
+// fixes five motions. The fillet is 0.01, 0.02 and −0.012 mm off: in its frame the flat top is 0.012 mm outside.
+TEST(DatumFrame, AFilletAsDatumFixesFiveMotionsAndCentresThePart) {
+  const cad::Model model = testing::filleted_boss();
+  const auto on_fillet = [](double u, double v) {
+    return Point3((13 + 12 * std::cos(v)) * std::cos(u), (13 + 12 * std::cos(v)) * std::sin(u), 18 + 12 * std::sin(v));
+  };
+  const int fillet = testing::face_through(model, on_fillet(0.3, 0.7));
+  const int top = testing::face_through(model, Point3(2, 3, 30));
+  const Vector3 off(0.01, 0.02, -0.012);
+  compensation::CompensationResult r;
+  r.registration.transform = registered_pose();
+  for (int i = 0; i < 12; ++i) {
+    for (const double v : {0.3, 0.7, 1.1}) add(r, on_fillet(2 * M_PI * i / 12, v) + off, fillet, 0.001);
+  }
+  for (double x = -8; x <= 8; x += 4) {
+    for (double y = -8; y <= 8; y += 4) add(r, Point3(x, y, 30), top, 0.001);
+  }
+  const DatumFrame frame = establish_frame({{"F", {fillet}}}, model, r);
+  ASSERT_TRUE(frame.ok()) << frame.reason;
+  EXPECT_EQ(frame.fixed(), 5);
+  EXPECT_LT(frame.datums.at(0).rms, 1e-8);
+  Specification spec;
+  spec.datums = {{"F", {fillet}}};
+  spec.characteristics = {{.name = "top", .faces = {top}, .tolerance = 0.1, .outside = {}, .datums = {"F"}}};
+  const CharacteristicResult c = evaluate(spec, model, r).characteristics.at(0);
+  ASSERT_NE(c.decision, Decision::NotEvaluated) << c.reason;
+  EXPECT_NEAR(c.min, 0.012, 1e-7);
+  EXPECT_NEAR(c.max, 0.012, 1e-7);
+}
+
 TEST(DatumFrame, ThreeTwoOnePointsFixEveryMotion) {
   // The paper's step 1: three points on the bottom, two on the front, one on the left end. The actual part's bottom
   // is 0.01 mm up, its front 0.02 mm back (−y) and its left end 0.005 mm in (+x): the frame shifts it by
