@@ -126,10 +126,27 @@ std::optional<Algebraic> algebraic_fit(const Eigen::MatrixXd& X) {
   return out;
 }
 
-// The Hold for gauss_newton from the caller's limits; none when they ask for every parameter to be fitted.
-std::optional<Hold> hold_for(const HoldPoorlyFixed& limits, Eigen::VectorXd scale) {
-  if (!(limits.sigma > 0.0) || !(limits.max_std > 0.0)) return std::nullopt;
-  return Hold{.scale = std::move(scale), .min_singular = limits.sigma / limits.max_std};
+// gauss_newton with the caller's limits (HoldPoorlyFixed; none asked for: every parameter fitted, no Hold), the
+// parameters scaled to mm by `scale`; `held` as Hold::held.
+template <class Linearise, class Update>
+ElementFitStatus gauss_newton_within(const HoldPoorlyFixed& limits, const Eigen::VectorXd& scale, Eigen::Index n,
+                                     double size, int& iterations, int& held, Linearise&& linearise, Update&& update) {
+  held = 0;
+  if (!(limits.sigma > 0.0) || !(limits.max_std > 0.0)) {
+    return gauss_newton(n, scale.size(), size, iterations, linearise, update);
+  }
+  Hold hold{.scale = scale, .min_singular = limits.sigma / limits.max_std};
+  const ElementFitStatus status = gauss_newton(n, scale.size(), size, iterations, linearise, update, &hold);
+  held = hold.held;
+  return status;
+}
+
+// The rms of the points' distances from a fitted element (fitting::distance), in the points' own coordinates.
+template <class Element>
+double rms_distance(const Centred& c, const Element& e) {
+  Eigen::VectorXd d(static_cast<Eigen::Index>(c.p.size()));
+  for (std::size_t i = 0; i < c.p.size(); ++i) d(static_cast<Eigen::Index>(i)) = distance(e, c.centroid + c.p[i]);
+  return rms_of(d);
 }
 
 // A rotation taking `axis` (unit) to +z.
@@ -223,9 +240,7 @@ ConeFit cone_from(const Centred& c, Vector3 axis, Point3 through, double radius,
   recentre();
   Eigen::VectorXd scale(6);
   scale << 1.0, 1.0, 1.0 / c.size, 1.0 / c.size, 1.0, 1.0 / c.size;
-  std::optional<Hold> hold = hold_for(limits, scale);
-  f.status = gauss_newton(n, 6, c.size, f.iterations, linearise, update, hold ? &*hold : nullptr);
-  f.held = hold ? hold->held : 0;
+  f.status = gauss_newton_within(limits, scale, n, c.size, f.iterations, f.held, linearise, update);
   if (f.status == ElementFitStatus::Degenerate || !(std::abs(half_angle) < 0.5 * std::numbers::pi)) {
     f.status = ElementFitStatus::Degenerate;
     return f;
@@ -234,9 +249,7 @@ ConeFit cone_from(const Centred& c, Vector3 axis, Point3 through, double radius,
   f.axis = axis;
   f.radius = radius;
   f.half_angle = half_angle;
-  Eigen::VectorXd d(n);
-  for (Eigen::Index i = 0; i < n; ++i) d(i) = distance(f, c.centroid + c.p[static_cast<std::size_t>(i)]);
-  f.rms = rms_of(d);
+  f.rms = rms_distance(c, f);
   return f;
 }
 
@@ -273,9 +286,7 @@ TorusFit torus_from(const Centred& c, Vector3 axis, Point3 centre_estimate, doub
   };
   Eigen::VectorXd scale(7);
   scale << 1.0, 1.0, 1.0, 1.0 / c.size, 1.0 / c.size, 1.0, 1.0;
-  std::optional<Hold> hold = hold_for(limits, scale);
-  f.status = gauss_newton(n, 7, c.size, f.iterations, linearise, update, hold ? &*hold : nullptr);
-  f.held = hold ? hold->held : 0;
+  f.status = gauss_newton_within(limits, scale, n, c.size, f.iterations, f.held, linearise, update);
   if (f.status == ElementFitStatus::Degenerate || !(minor > 0.0)) {
     f.status = ElementFitStatus::Degenerate;
     return f;
@@ -284,9 +295,7 @@ TorusFit torus_from(const Centred& c, Vector3 axis, Point3 centre_estimate, doub
   f.axis = axis;
   f.radius = radius;
   f.minor_radius = minor;
-  Eigen::VectorXd d(n);
-  for (Eigen::Index i = 0; i < n; ++i) d(i) = distance(f, c.centroid + c.p[static_cast<std::size_t>(i)]);
-  f.rms = rms_of(d);
+  f.rms = rms_distance(c, f);
   return f;
 }
 

@@ -218,8 +218,16 @@ std::string view_json(const compensation::CompensationResult& r, const ReportCon
                      {"characteristics", characteristics}};
   // Inside <script>, "</script>" or "<!--" in a name (a characteristic's, from the specification or the CAD file)
   // would end or upset the element: every '<' as its JSON escape, which only strings hold.
-  std::string text = json_text(view, -1), safe;
-  for (char ch : text) safe += ch == '<' ? std::string("\\u003c") : std::string(1, ch);
+  const std::string text = json_text(view, -1);
+  std::string safe;
+  safe.reserve(text.size());
+  for (const char ch : text) {
+    if (ch == '<') {
+      safe += "\\u003c";
+    } else {
+      safe += ch;
+    }
+  }
   return safe;
 }
 

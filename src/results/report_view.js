@@ -1,7 +1,8 @@
 // The report's 3-D view (io/report.cpp inlines this file): the compensated points coloured by deviation, status,
-// uncertainty or a chosen characteristic's deviation in its frame and zone, over the registered nominal faces' outlines, drawn with a depth buffer on a 2-D canvas (no WebGL, no
-// library: it opens offline and in any browser). Drag to rotate, shift-drag or right-drag to pan, wheel to zoom,
-// double-click to reset; hovering a point names its row.
+// uncertainty or a chosen characteristic's deviation in its frame and zone, over the registered nominal faces'
+// outlines, drawn with a depth buffer on a 2-D canvas (no WebGL, no library: it opens offline and in any browser).
+// Drag to rotate, shift-drag or right-drag to pan, wheel to zoom, double-click to reset; hovering a point names its
+// row.
 (function () {
   "use strict";
   const data = JSON.parse(document.getElementById("view-data").textContent);
@@ -39,18 +40,15 @@
   function colour(k) {
     if (mode === "status") return STATUS[data.s[k]] || NONE;
     if (mode === "characteristic") {
-      // Its zone's limits at the colour bar's ends; beyond them the darkest ends.
+      // Its zone's limits at the colour bar's ends.
       const j = chosen ? onChosen[k] : -1;
-      if (j < 0) return NONE;
-      const d = chosen.d[j], [lo, hi] = chosen.zone;
-      if (d < lo) return BELOW;
-      if (d > hi) return ABOVE;
-      return ramp(RDBU, (d - lo) / (hi - lo));
+      return j < 0 ? NONE : diverging(chosen.d[j], chosen.zone);
     }
     if (mode === "u") return data.u[k] === null ? NONE : ramp(VIRIDIS, data.u[k] / data.u_max);
-    const d = data.d[k];
-    if (d === null || data.s[k] !== 0) return NONE;
-    const [lo, hi] = data.dev_range;
+    return data.d[k] === null || data.s[k] !== 0 ? NONE : diverging(data.d[k], data.dev_range);
+  }
+  // A deviation on the diverging map from lo to hi; beyond them the darkest ends.
+  function diverging(d, [lo, hi]) {
     if (d < lo) return BELOW;
     if (d > hi) return ABOVE;
     return ramp(RDBU, (d - lo) / (hi - lo));

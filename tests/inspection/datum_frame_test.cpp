@@ -99,6 +99,15 @@ CharacteristicResult profile(const compensation::CompensationResult& r, int face
   return evaluate(spec, b.model, r).characteristics.at(0);
 }
 
+// The same of `face` of another part, in the frame of one datum on its face `datum_face`.
+CharacteristicResult profile_to(const cad::Model& model, const compensation::CompensationResult& r, int datum_face,
+                                int face) {
+  Specification spec;
+  spec.datums = {{"D", {datum_face}}};
+  spec.characteristics = {{.name = "P", .faces = {face}, .tolerance = 0.1, .outside = {}, .datums = {"D"}}};
+  return evaluate(spec, model, r).characteristics.at(0);
+}
+
 TEST(DatumFrame, APrimaryPlaneTiltedUnderThePartTiltsTheTopInItsFrame) {
   // The bottom's actual points lie on z = s(x − 30): the frame turns the part by θ = atan s about y through (30, ·, 0)
   // to lay that plane on z = 0, so the top's point (x, y, 20) goes to z' = 20 cos θ − (x − 30) sin θ.
@@ -258,10 +267,7 @@ TEST(DatumFrame, ACountersinkAsDatumFixesFiveMotionsAndCentresThePart) {
   EXPECT_EQ(frame.fixed(), 5);
   EXPECT_FALSE(frame.datums.at(0).size_change.has_value());  // a cone's size is its place along its axis
   EXPECT_LT(frame.datums.at(0).rms, 1e-8);
-  Specification spec;
-  spec.datums = {{"K", {cone}}};
-  spec.characteristics = {{.name = "top", .faces = {top}, .tolerance = 0.1, .outside = {}, .datums = {"K"}}};
-  const CharacteristicResult c = evaluate(spec, model, r).characteristics.at(0);
+  const CharacteristicResult c = profile_to(model, r, cone, top);
   ASSERT_NE(c.decision, Decision::NotEvaluated) << c.reason;
   EXPECT_NEAR(c.min, -0.015, 1e-7);
   EXPECT_NEAR(c.max, -0.015, 1e-7);
@@ -289,10 +295,7 @@ TEST(DatumFrame, AFilletAsDatumFixesFiveMotionsAndCentresThePart) {
   ASSERT_TRUE(frame.ok()) << frame.reason;
   EXPECT_EQ(frame.fixed(), 5);
   EXPECT_LT(frame.datums.at(0).rms, 1e-8);
-  Specification spec;
-  spec.datums = {{"F", {fillet}}};
-  spec.characteristics = {{.name = "top", .faces = {top}, .tolerance = 0.1, .outside = {}, .datums = {"F"}}};
-  const CharacteristicResult c = evaluate(spec, model, r).characteristics.at(0);
+  const CharacteristicResult c = profile_to(model, r, fillet, top);
   ASSERT_NE(c.decision, Decision::NotEvaluated) << c.reason;
   EXPECT_NEAR(c.min, 0.012, 1e-7);
   EXPECT_NEAR(c.max, 0.012, 1e-7);
