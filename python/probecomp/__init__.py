@@ -77,9 +77,15 @@ class CompensationResult:
     def __len__(self):
         return len(self.status)
 
-    def report_html(self, model):
-        """The command line's --report page for this run, as a str (self-contained HTML)."""
-        return self._run.report_html(model, self._tolerance)
+    def report_html(self, model, characteristics=None):
+        """The command line's --report page for this run, as a str (self-contained HTML).
+
+        characteristics  as for judge(): the page then has their table and the 3-D view can be coloured by each,
+                         and it is in the alignment frame where the specification asks for one, as
+                         `compensate --characteristics SPEC --report` gives it
+        """
+        spec = None if characteristics is None else str(characteristics)
+        return self._run.report_html(model, self._tolerance, spec)
 
     def judge(self, model, characteristics):
         """The drawing's characteristics judged on this run's trusted points: `compensate --characteristics`.

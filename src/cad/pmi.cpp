@@ -102,10 +102,16 @@ std::map<std::string, EntityDatum> datums_from_entities(const STEPControl_Reader
       datums.emplace_back(datum, datum->Identification()->String().ToCString());
     } else if (const auto usage = Handle(StepAP242_ItemIdentifiedRepresentationUsage)::DownCast(e); !usage.IsNull()) {
       const Handle(Standard_Transient) definition = usage->Definition().Value();
-      for (int k = 1; k <= usage->NbIdentifiedItem(); ++k) items.emplace(definition.get(), usage->IdentifiedItemValue(k));
-      if (usage->NbIdentifiedItem() == 0) {
-        // OpenCASCADE 7.6 leaves the items empty where the file gives them as a typed SET_REPRESENTATION_ITEM((...))
-        // (NIST FTC-06's datums B and F); the faces it references are still in the entity graph.
+      bool read = false;
+      for (int k = 1; k <= usage->NbIdentifiedItem(); ++k) {
+        if (usage->IdentifiedItemValue(k).IsNull()) continue;
+        items.emplace(definition.get(), usage->IdentifiedItemValue(k));
+        read = true;
+      }
+      if (!read) {
+        // OpenCASCADE 7.6 reads one null item where the file gives them as a typed SET_REPRESENTATION_ITEM((...))
+        // (NIST FTC-06's datums B and F, STC-08's B, E, G, H and J); the faces it references are still in the entity
+        // graph.
         for (Interface_EntityIterator shared = ws->Graph().Shareds(e); shared.More(); shared.Next()) {
           if (const auto item = Handle(StepRepr_RepresentationItem)::DownCast(shared.Value()); !item.IsNull()) {
             items.emplace(definition.get(), item);

@@ -174,7 +174,7 @@ Specification from_pmi(const cad::Pmi& pmi, int& skipped) {
 
 Inspection evaluate(const Specification& spec, const cad::Model& nominal, const compensation::CompensationResult& result) {
   Inspection out;
-  std::map<std::string, DatumFrame> frames;  // by their datums joined with '|'; "" is the frame of no datums
+  std::map<std::string, DatumFrame>& frames = out.frames;
   for (const CharacteristicSpec& s : spec.characteristics) {
     CharacteristicResult c;
     c.spec = s;
@@ -292,7 +292,7 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
       if (d != spec.datums.end()) order.push_back(*d);
     }
     out.alignment_frame = establish_frame(order, nominal, result);
-    if (out.alignment_frame->ok() && !frames.contains(out.alignment)) {
+    if (frames.try_emplace(out.alignment, *out.alignment_frame).second && out.alignment_frame->ok()) {
       for (const DatumResult& d : out.alignment_frame->datums) out.datums.push_back({out.alignment, d});
     }
   }

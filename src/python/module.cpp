@@ -104,6 +104,19 @@ struct Run {
   std::vector<int> part_faces;                // their faces' indices
 };
 
+// As compensate --characteristics: a specification file, or "pmi" for the model's STEP file's own, judged on the
+// run's points.
+inspection::Inspection judge(const Run& r, const cad::Model& model, const std::string& characteristics) {
+  inspection::Specification spec;
+  if (characteristics == "pmi") {
+    int skipped = 0;
+    spec = inspection::from_pmi(cad::read_pmi(model.path, model), skipped);
+  } else {
+    spec = inspection::read_specification(characteristics, model);
+  }
+  return inspection::evaluate(spec, model, r.result);
+}
+
 Run run_compensate(const cad::Model& model, const Array& centres, const Array& radii, std::optional<double> probe_radius,
                    const std::optional<Array>& normals, const std::string& method, const std::optional<Array>& initial,
                    bool accept_doubtful, bool fit, const std::string& points_name, const std::string& unit,
@@ -349,26 +362,35 @@ PYBIND11_MODULE(_probecomp, m) {
            py::arg("tolerance") = std::nullopt)
       .def("judge_json",
            [](const Run& r, const cad::Model& model, const std::string& characteristics) {
-             // As compensate --characteristics: a specification file, or "pmi" for the model's STEP file's own.
-             inspection::Specification spec;
-             if (characteristics == "pmi") {
-               int skipped = 0;
-               spec = inspection::from_pmi(cad::read_pmi(model.path, model), skipped);
-             } else {
-               spec = inspection::read_specification(characteristics, model);
-             }
-             const inspection::Inspection judged = inspection::evaluate(spec, model, r.result);
+             const inspection::Inspection judged = judge(r, model, characteristics);
              return results::statistics_json(r.result, r.inputs, {.total = r.seconds}, std::nullopt, &judged);
            },
            py::arg("model"), py::arg("characteristics"))
       .def("report_html",
-           [](const Run& r, const cad::Model& model, std::optional<std::pair<double, double>> tolerance) {
+           [](const Run& r, const cad::Model& model, std::optional<std::pair<double, double>> tolerance,
+              const std::optional<std::string>& characteristics) {
              results::ReportContext c{.inputs = r.inputs, .tolerance = std::nullopt, .timings = {.total = r.seconds}};
              if (tolerance) c.tolerance = results::Tolerance{tolerance->first, tolerance->second};
-             c.nominal = results::registered_outline(model, r.result.registration.transform);
-             return results::html_report(r.result, c);
+             // As compensate --characteristics --report: the characteristics' table and colouring, and the page in
+             // the alignment frame where the specification asks for one.
+             std::optional<inspection::Inspection> judged;
+             std::optional<compensation::CompensationResult> in_frame;
+             if (characteristics) {
+               judged = judge(r, model, *characteristics);
+               c.inspection = &*judged;
+               if (judged->alignment_frame) {
+                 if (!judged->alignment_frame->ok()) {
+                   throw InputError(*characteristics + ": alignment " + judged->alignment + ": " +
+                                    judged->alignment_frame->reason);
+                 }
+                 in_frame = inspection::aligned(r.result, *judged->alignment_frame, model);
+               }
+             }
+             const compensation::CompensationResult& shown = in_frame ? *in_frame : r.result;
+             c.nominal = results::registered_outline(model, shown.registration.transform);
+             return results::html_report(shown, c);
            },
-           py::arg("model"), py::arg("tolerance") = std::nullopt);
+           py::arg("model"), py::arg("tolerance") = std::nullopt, py::arg("characteristics") = std::nullopt);
 
   m.def("compensate", &run_compensate, py::arg("model"), py::arg("centres"), py::arg("radii"), py::arg("probe_radius"),
         py::arg("normals"), py::arg("method"), py::arg("initial_transform"), py::arg("accept_doubtful_registration"),

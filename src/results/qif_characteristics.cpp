@@ -133,6 +133,57 @@ std::map<std::string, std::string> add_datum_frames(pugi::xml_node root, const i
   return frame_ids;
 }
 
+// Each datum reference frame set up, as measured: a coordinate system named after it (CoordinateSystems) and, in
+// `results`, its actual transform (ActualTransforms), the two tied by a CoordinateSystemActualTransformAssociation.
+// The transform takes coordinates in the frame (the nominal's, the part located by its datums) to the document's
+// measured ones: X = R·x + O (TransformMatrixType), R's columns the XDirection, YDirection and ZDirection.
+void add_actual_frames(pugi::xml_node root, pugi::xml_node results, const inspection::Inspection& inspection,
+                       const std::function<std::string()>& next, const std::function<std::string(double)>& length) {
+  std::vector<std::pair<const std::string*, const inspection::DatumFrame*>> located;
+  for (const auto& [key, frame] : inspection.frames) {
+    if (!key.empty() && frame.ok()) located.emplace_back(&key, &frame);
+  }
+  if (located.empty()) return;
+  std::initializer_list<const char*> after_systems = {
+      "DatumReferenceFrames", "MeasurementResources", "ThreadSpecifications", "Product", "Features", "FeatureZones",
+      "Characteristics", "Plan", "Results", "Statistics", "ManufacturingProcessTraceabilities", "Rules", "UserDataXML",
+      "Signature"};
+  pugi::xml_node systems = insert(root, "CoordinateSystems", after_systems).append_child("CoordinateSystemDefinitions");
+  pugi::xml_node transforms = insert(results, "ActualTransforms", {"CoordinateSystemActualTransformAssociations",
+                                                                   "InspectionStatus", "ActualComponentIds"});
+  pugi::xml_node associations = insert(results, "CoordinateSystemActualTransformAssociations",
+                                       {"InspectionStatus", "ActualComponentIds"});
+  const auto vector = [](const Vector3& v) {
+    return io::fixed(v.x(), 12) + " " + io::fixed(v.y(), 12) + " " + io::fixed(v.z(), 12);
+  };
+  for (const auto& [key, frame] : located) {
+    const std::string system_id = next(), transform_id = next();
+    pugi::xml_node system = systems.append_child("CoordinateSystem");
+    system.append_attribute("id") = system_id.c_str();
+    text(system, "Name", *key);
+
+    pugi::xml_node t = transforms.append_child("Transform");
+    t.append_attribute("id") = transform_id.c_str();
+    pugi::xml_node rotation = t.append_child("Rotation");
+    const Eigen::Matrix3d R = frame->transform.linear();
+    text(rotation, "XDirection", vector(R.col(0)));
+    text(rotation, "YDirection", vector(R.col(1)));
+    text(rotation, "ZDirection", vector(R.col(2)));
+    const Vector3 o = frame->transform.translation();
+    text(t, "Origin", length(o.x()) + " " + length(o.y()) + " " + length(o.z()));
+    attributes(t, {{"probecomp:fixed", std::to_string(frame->fixed())}});
+    text(t, "Name", *key);
+
+    pugi::xml_node a = associations.append_child("CoordinateSystemActualTransformAssociation");
+    text(a, "ActualTransformId", transform_id);
+    text(a, "CoordinateSystemId", system_id);
+  }
+  const int n = static_cast<int>(located.size());
+  systems.prepend_attribute("n") = n;
+  transforms.prepend_attribute("n") = n;
+  associations.prepend_attribute("n") = n;
+}
+
 }  // namespace
 
 void add_characteristics(std::string& xml, const inspection::Inspection& inspection, double scale) {
@@ -229,6 +280,7 @@ void add_characteristics(std::string& xml, const inspection::Inspection& inspect
       text(m, "MinValue", length(c.min));
     }
   }
+  add_actual_frames(root, results, inspection, next, length);
   root.attribute("idMax").set_value(static_cast<long long>(id));
   std::ostringstream out;
   doc.save(out, "  ", pugi::format_default, pugi::encoding_utf8);

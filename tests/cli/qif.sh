@@ -111,7 +111,7 @@ json_check "$W/out.json" "j['inputs']['tip_radii'] == [1]" "compensated from QIF
 # in the document, which still validates; their figures are --json's, in the document's unit (mm here).
 printf '{"datums": {"A": {"faces": [0]}}, "characteristics": [{"name": "P1", "faces": [0], "tolerance": 3.0},
   {"name": "P2", "faces": [0], "tolerance": 0.001, "datums": ["A"]}, {"name": "P3", "faces": [0], "tolerance": 0.2, "datums": ["B"]}]}' \
-  | sed 's/"B"/"A"/; s/"P3", "faces": \[0\]/"P3", "faces": [0], "outside": 0.05/' >"$W/spec.json"
+  | sed 's/"B"/"A"/; s/"P3", "faces": \[0\]/"P3", "faces": [0], "outside": 0.05/; s/]}]}$/]}], "alignment": ["A"]}/' >"$W/spec.json"
 "$P" compensate --cad "$W/demo/nominal.igs" --points "$W/raw.qif" --characteristics "$W/spec.json" --output "$W/judged.qif" \
   --json "$W/judged.json" --quiet 2>/dev/null || { echo "FAIL: compensate with characteristics to QIF"; fail=1; }
 validates "$W/judged.qif" || fail=1
@@ -123,11 +123,27 @@ json_check "$W/judged.json" "abs(float(__import__('re').search(r'<SurfaceProfile
   "judged.qif: the value and the outer disposition as --json's" || fail=1
 
 # The datum reference frame A: one datum definition labelled A (its faces), one frame of it as primary, fitted by
-# least squares, and the two characteristics in it refer to that frame; P1 (form only) to none.
-check "python3 - '$W/judged.qif' <<'PY'
-import sys, xml.etree.ElementTree as ET
+# least squares, and the two characteristics in it refer to that frame; P1 (form only) to none. As measured: a
+# coordinate system A tied to an actual transform, the frame's CAD-to-machine motion that --json gives as the output's
+# transform (the specification aligns the output to A): its rotation's columns and origin.
+check "python3 - '$W/judged.qif' '$W/judged.json' <<'PY'
+import json, sys, xml.etree.ElementTree as ET
 q = '{http://qifstandards.org/xsd/qif3}'
 root = ET.parse(sys.argv[1]).getroot()
+T = json.load(open(sys.argv[2]))['transform']
+results = root.find(q + 'Results/' + q + 'MeasurementResultsSet/' + q + 'MeasurementResults')
+actual = results.findall(q + 'ActualTransforms/' + q + 'Transform')
+systems = root.findall(q + 'CoordinateSystems/' + q + 'CoordinateSystemDefinitions/' + q + 'CoordinateSystem')
+tied = results.findall(q + 'CoordinateSystemActualTransformAssociations/' + q + 'CoordinateSystemActualTransformAssociation')
+assert len(actual) == 1 and actual[0].findtext(q + 'Name') == 'A', 'one actual transform, of A'
+assert len(systems) == 1 and systems[0].findtext(q + 'Name') == 'A', 'one coordinate system A'
+assert len(tied) == 1 and tied[0].findtext(q + 'ActualTransformId') == actual[0].get('id') \\
+    and tied[0].findtext(q + 'CoordinateSystemId') == systems[0].get('id'), 'A tied to its transform'
+columns = [[float(v) for v in actual[0].findtext(q + 'Rotation/' + q + axis).split()]
+           for axis in ('XDirection', 'YDirection', 'ZDirection')]
+origin = [float(v) for v in actual[0].findtext(q + 'Origin').split()]
+assert max(abs(columns[c][r] - T[r][c]) for r in range(3) for c in range(3)) < 1e-11, (columns, T)
+assert max(abs(origin[r] - T[r][3]) for r in range(3)) < 1e-8, (origin, T)
 datums = root.findall(q + 'DatumDefinitions/' + q + 'DatumDefinition')
 frames = root.findall(q + 'DatumReferenceFrames/' + q + 'DatumReferenceFrame')
 assert len(datums) == 1 and datums[0].findtext(q + 'DatumLabel') == 'A', 'one datum A'

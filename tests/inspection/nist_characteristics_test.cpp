@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -51,7 +52,8 @@ struct Judged {
   double worst = 0.0, worst_in_u = 0.0;
 };
 
-Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7) {
+Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7,
+                      double max_move = std::numeric_limits<double>::infinity()) {
   const cad::Model nominal = cad::read_model(file);
   const cad::Pmi pmi = cad::read_pmi(file, nominal);
   int skipped = 0;
@@ -95,7 +97,7 @@ Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7)
       const cad::Face& face = nominal.faces[static_cast<std::size_t>(f)];
       const bool sized = face.analytic && (face.analytic->surface().kind == cad::ElementaryKind::Cylinder ||
                                            face.analytic->surface().kind == cad::ElementaryKind::Sphere);
-      free = free && !datum_faces.contains(f) && !moved.contains(f) && (!sized || move <= 0.3);
+      free = free && !datum_faces.contains(f) && !moved.contains(f) && (!sized || move <= 0.3) && move <= max_move;
     }
     if (!free) continue;
     ++k;
@@ -148,7 +150,11 @@ Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7)
     std::printf("  %-12s %-6s t %.4f  move %+.4f  min %+.4f max %+.4f  2u %.4f k %.2f  %s %s\n", c.spec.name.c_str(),
                 frame.c_str(), c.spec.tolerance, t, c.min, c.max, c.u, c.coverage, to_string(c.decision), c.reason.c_str());
     if (c.decision == Decision::NotEvaluated) {
-      EXPECT_NE(c.reason.find("could not be read from the file"), std::string::npos) << c.spec.name << ": " << c.reason;
+      // Only for what the file does not give (an unread datum), or a frame whose last datum is left nothing to fix
+      // (STC-08's D|J|H, below).
+      EXPECT_TRUE(c.reason.find("could not be read from the file") != std::string::npos ||
+                  c.reason.find("already fix every motion") != std::string::npos)
+          << c.spec.name << ": " << c.reason;
       continue;
     }
     ++out.evaluated;
@@ -215,9 +221,20 @@ TEST(NistCharacteristics, CtcFoursProfilesAreJudgedInTheirDatumFramesAsTheirMove
   EXPECT_LT(0.5 * (lower + upper), 0.010) << "the median over the seeds";
 }
 
-TEST(NistCharacteristics, FtcSixsProfilesOnItsUnreadDatumsSaySo) {
+TEST(NistCharacteristics, FtcSixsProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay) {
   const Judged j = judge_as_moved(test::kCadDir / "nist_ftc_06_asme1_ap242-e2.stp");
-  EXPECT_GT(j.evaluated, 0);
+  EXPECT_EQ(j.evaluated, 14);  // datums B and F included (their faces in a typed SET_REPRESENTATION_ITEM)
+  EXPECT_LT(j.worst, 0.010);
+}
+
+// STC-08's profiles are 0.13–1.52 mm wide on most of its faces: moved by up to three quarters of that, most points
+// would lie 0.4–1.1 mm off, and the registration (the best fit of all points) refuses the run as doubtful (robust
+// scale 0.354 mm, more than r/4), rightly: that fit is then no location of the part. Its faces are moved by at most
+// 0.4 mm (the others stay, and must read 0). Profile 25's frame D|J|H is not set up, and says why: J is a pattern of
+// two holes (four half-cylinder faces, 92.7 mm apart), which with D fixes every motion, so H has none left to fix.
+TEST(NistCharacteristics, StcEightsProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay) {
+  const Judged j = judge_as_moved(test::kCadDir / "nist_stc_08_asme1_ap242-e3.stp", 7, 0.4);
+  EXPECT_EQ(j.evaluated, 13);
   EXPECT_LT(j.worst, 0.010);
 }
 

@@ -5,6 +5,7 @@ probecomp command; PROBECOMP_CAD_DIR, the test CAD files."""
 
 import csv
 import json
+import re
 import os
 import subprocess
 import sys
@@ -127,6 +128,14 @@ def test_the_demo_gives_the_clis_numbers(demo, work):
     theirs = json.load(open(judged_cli))
     assert judged["characteristics"] == theirs["characteristics"]
     assert judged["datums"] == theirs["datums"] and judged["datums"][0]["fit"] == "tangent"
+    # Their report: the command line's table of characteristics and datums, and the view's colouring by each.
+    cli("compensate", "--cad", demo / "nominal.igs", "--points", demo / "raw.csv", "--probe-radius", 1,
+        "--characteristics", spec, "--report", work / "judged.html", "--quiet")
+    table = re.compile(r'<table id="(?:characteristics|datums)">.*?</table>', re.S)
+    page, theirs = res.report_html(model, spec), (work / "judged.html").read_text()
+    assert len(table.findall(page)) == 2 and table.findall(page) == table.findall(theirs)
+    assert re.search(r'<select id="view-characteristic"><option value="0">F</option><option value="1">P</option>', page)
+    assert not table.findall(html)
     with pytest.raises(probecomp.InputError, match="spec_bad.json"):
         (work / "spec_bad.json").write_text("{")
         res.judge(model, work / "spec_bad.json")

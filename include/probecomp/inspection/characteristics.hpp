@@ -84,6 +84,8 @@ struct FrameDatum {
 struct Inspection {
   std::vector<FrameDatum> datums;  // of every frame set up, in the order of first use
   std::vector<CharacteristicResult> characteristics;
+  // Every frame set up (or tried: NotDone), by its datums joined with '|' ("" is the frame of no datums).
+  std::map<std::string, DatumFrame> frames;
   std::string alignment;                    // the specification's alignment frame ("A|B|C"); empty: none
   std::optional<DatumFrame> alignment_frame;  // set up when there is one (NotDone: why, in its reason)
 };
