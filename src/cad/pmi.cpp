@@ -35,12 +35,16 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 
 #include "probecomp/error.hpp"
 #include "probecomp/occt/crash_guard.hpp"
+#include "probecomp/cad/locator.hpp"
+#include "step_measures.hpp"
 
 #include "exchange.hpp"
 
@@ -49,6 +53,10 @@ namespace probecomp::cad {
 namespace {
 
 using detail::fail;
+
+// A point datum target lies on a face of the file's own geometry, to the precision of its coordinates (STEP files
+// write 10–15 digits) and the closest-point solver's (1e-9 mm): 1 µm takes the face it is on and no other.
+constexpr double kTargetOnFace = 1e-3;
 
 ToleranceType type_of(XCAFDimTolObjects_GeomToleranceType t) {
   switch (t) {
@@ -229,8 +237,14 @@ Pmi read_pmi(const std::filesystem::path& path, const Model& model) {
       faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
     };
 
-    // A datum may come as several labels of one name: its feature, or each of its targets.
+    // A datum may come as several labels of one name: its feature, or each of its targets (each target's label
+    // once for every tolerance that refers to it: NIST CTC-02).
     std::map<std::string, DatumFeature> features;
+    struct PlacedTargets {
+      std::map<int, Point3> points;  // by number
+      std::set<int> unplaced;        // lines, and points without a place
+    };
+    std::map<std::string, PlacedTargets> targets;
     TDF_LabelSequence datum_labels;
     dimtol->GetDatumLabels(datum_labels);
     for (int i = 1; i <= datum_labels.Length(); ++i) {
@@ -245,7 +259,14 @@ Pmi read_pmi(const std::filesystem::path& path, const Model& model) {
                                    object->GetDatumTargetType() == XCAFDimTolObjects_DatumTargetType_Rectangle ||
                                    object->GetDatumTargetType() == XCAFDimTolObjects_DatumTargetType_Circle);
       if (target && !area) {
-        ++feature.point_or_line_targets;
+        PlacedTargets& t = targets[name];
+        const int number = object->GetDatumTargetNumber();
+        if (object->HasDatumTargetParams() && object->GetDatumTargetType() == XCAFDimTolObjects_DatumTargetType_Point) {
+          const gp_Pnt at = object->GetDatumTargetAxis().Location();
+          t.points.emplace(number, Point3(at.X(), at.Y(), at.Z()));
+        } else {
+          t.unplaced.insert(number);
+        }
         continue;
       }
       if (area) ++feature.area_targets;
@@ -262,6 +283,24 @@ Pmi read_pmi(const std::filesystem::path& path, const Model& model) {
         }
       }
     }
+    // Point targets on the faces they lie on; a target off every face is not used (and counted).
+    std::optional<ModelLocator> locator;
+    for (auto& [name, placed] : targets) {
+      DatumFeature& feature = features[name];
+      for (const auto& [number, point] : placed.points) {
+        if (!locator) locator.emplace(model);
+        const ModelPoint foot = locator->closest_point(point);
+        if (foot.ok() && std::abs(foot.distance) <= kTargetOnFace) {
+          feature.targets.push_back({.number = number, .point = point, .face = foot.face});
+          feature.faces.push_back(foot.face);
+        } else {
+          placed.unplaced.insert(number);
+        }
+      }
+      // The entity graph counts every point or line target; those placed here are taken.
+      feature.point_or_line_targets = std::max(static_cast<int>(placed.unplaced.size()),
+                                               feature.point_or_line_targets - static_cast<int>(feature.targets.size()));
+    }
     for (auto& [name, feature] : features) {
       std::sort(feature.faces.begin(), feature.faces.end());
       feature.faces.erase(std::unique(feature.faces.begin(), feature.faces.end()), feature.faces.end());
@@ -271,6 +310,7 @@ Pmi read_pmi(const std::filesystem::path& path, const Model& model) {
 
     TDF_LabelSequence tolerance_labels;
     dimtol->GetGeomToleranceLabels(tolerance_labels);
+    const std::map<std::string, detail::ToleranceMeasures> measures = detail::tolerance_measures(path);
     for (int i = 1; i <= tolerance_labels.Length(); ++i) {
       Handle(XCAFDoc_GeomTolerance) attr;
       if (!tolerance_labels.Value(i).FindAttribute(XCAFDoc_GeomTolerance::GetID(), attr)) continue;
@@ -296,14 +336,31 @@ Pmi read_pmi(const std::filesystem::path& path, const Model& model) {
       // A zero zone is meaningful only with a material condition (0 at MMC), but CTC-02's unread magnitudes come
       // back as 0 with their MMC modifiers too: a 0 is never taken for a zone, and the warning says which it may be.
       const double value = object->GetValue();
+      // What the file's own text gives where OpenCASCADE reads nothing: matched by the tolerance's name.
+      const detail::ToleranceMeasures* own = nullptr;
+      if (!object->GetSemanticName().IsNull()) {
+        const auto it = measures.find(object->GetSemanticName()->ToCString());
+        if (it != measures.end()) own = &it->second;
+      }
+      if (own != nullptr && own->displacement) t.outside = own->displacement;
       if (value > 0.0) {
         t.value = value;
+      } else if (own != nullptr && own->magnitude && *own->magnitude > 0.0) {
+        t.value = own->magnitude;
       } else {
         const bool material = object->GetMaterialRequirementModifier() != XCAFDimTolObjects_GeomToleranceMatReqModif_None;
         out.warnings.push_back("tolerance " + std::to_string(out.tolerances.size() + 1) + " (" + to_string(t.type) +
                                ", " + std::to_string(t.faces.size()) + " face" + (t.faces.size() == 1 ? "" : "s") +
-                               "): its magnitude was not read (OpenCASCADE reads 0 where the file stores it in a " +
-                               "complex entity" + (material ? "; or a zero zone at a material condition" : "") + ")");
+                               "): its magnitude was not read (neither OpenCASCADE, which reads 0 where the file " +
+                               "stores it in a complex entity, nor the file's own text gave one" +
+                               (material ? "; or a zero zone at a material condition" : "") + ")");
+      }
+      if (t.value && t.outside && !(*t.outside >= 0.0 && *t.outside <= *t.value)) {
+        out.warnings.push_back("tolerance " + std::to_string(out.tolerances.size() + 1) + " (" + to_string(t.type) +
+                               "): its unequally disposed zone reaches " + std::to_string(*t.outside) +
+                               " mm outside, beyond its " + std::to_string(*t.value) + " mm: not taken");
+        t.value.reset();
+        t.outside.reset();
       }
       out.tolerances.push_back(std::move(t));
     }

@@ -129,11 +129,19 @@ int run_info(const std::string& part, bool json) {
                             {"value", t.value ? io::json_number(*t.value, 9) : io::Json(nullptr)},
                             {"faces", t.faces},
                             {"datums", t.datums}});
+      if (t.outside) tolerances.back()["outside"] = io::json_number(*t.outside, 9);
     }
     io::Json features = io::Json::array();
     for (const cad::DatumFeature& d : pmi.datum_features) {
+      io::Json targets = io::Json::array();
+      for (const cad::DatumTargetPoint& t : d.targets) {
+        targets.push_back({{"number", t.number},
+                           {"point", {io::json_number(t.point.x(), 9), io::json_number(t.point.y(), 9),
+                                      io::json_number(t.point.z(), 9)}},
+                           {"face", t.face}});
+      }
       features.push_back({{"name", d.name}, {"faces", d.faces}, {"area_targets", d.area_targets},
-                          {"point_or_line_targets", d.point_or_line_targets}});
+                          {"point_targets", targets}, {"point_or_line_targets", d.point_or_line_targets}});
     }
     info_out["pmi"] = {{"datums", pmi.datums}, {"datum_features", features}, {"tolerances", tolerances},
                        {"warnings", pmi.warnings}};

@@ -147,11 +147,14 @@ Specification from_pmi(const cad::Pmi& pmi, int& skipped) {
   for (const cad::DatumFeature& d : pmi.datum_features) {
     if (d.point_or_line_targets > 0) {
       spec.unusable_datums[d.name] = "datum " + d.name + " is set by " + std::to_string(d.point_or_line_targets) +
-                                     " point or line datum targets, which are not read yet";
+                                     " line datum targets or points the file does not place on a face, which are not "
+                                     "read yet";
     } else if (d.faces.empty()) {
       spec.unusable_datums[d.name] = "datum " + d.name + ": its datum feature could not be read from the file";
     } else {
-      spec.datums.push_back({.name = d.name, .faces = d.faces});
+      DatumSpec datum{.name = d.name, .faces = d.faces};
+      for (const cad::DatumTargetPoint& t : d.targets) datum.targets.push_back({d.name + std::to_string(t.number), t.point});
+      spec.datums.push_back(std::move(datum));
     }
   }
   skipped = 0;
@@ -166,7 +169,10 @@ Specification from_pmi(const cad::Pmi& pmi, int& skipped) {
     s.name = std::string(t.type == cad::ToleranceType::Flatness ? "flatness " : "profile ") + std::to_string(k);
     s.faces = t.faces;
     s.tolerance = t.value.value_or(0.0);
-    if (t.type == cad::ToleranceType::ProfileOfSurface) s.datums = t.datums;
+    if (t.type == cad::ToleranceType::ProfileOfSurface) {
+      s.datums = t.datums;
+      if (t.outside && t.value && *t.outside >= 0.0 && *t.outside <= *t.value) s.outside = t.outside;
+    }
     spec.characteristics.push_back(std::move(s));
   }
   return spec;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <set>
@@ -176,16 +177,37 @@ DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Mode
   std::vector<std::vector<double>> u(datums.size());
   Point3 centre = Point3::Zero();
   std::size_t total = 0;
+  std::string untouched;  // the first target no trusted point touches
   for (std::size_t s = 0; s < datums.size(); ++s) {
     const std::set<int> faces(datums[s].faces.begin(), datums[s].faces.end());
+    const std::vector<TargetPoint>& targets = datums[s].targets;
+    std::vector<int> touches(targets.size(), 0);
     for (const compensation::CompensatedPoint& p : result.points) {
       if (p.status != compensation::PointStatus::Ok || !faces.contains(p.face)) continue;
-      points[s].push_back(to_cad * p.contact);
+      const Point3 x = to_cad * p.contact;
+      bool at_target = targets.empty();
+      for (std::size_t t = 0; t < targets.size(); ++t) {
+        if ((x - targets[t].point).norm() <= kTargetReach) {
+          ++touches[t];
+          at_target = true;
+        }
+      }
+      if (!at_target) continue;
+      points[s].push_back(x);
       const auto noise = face_noise.find(p.face);
       u[s].push_back(std::max(std::isfinite(p.uncertainty) ? p.uncertainty : 0.0,
                               noise != face_noise.end() && std::isfinite(noise->second) ? noise->second : 0.0));
       centre += points[s].back();
       ++total;
+    }
+    for (std::size_t t = 0; t < targets.size() && untouched.empty(); ++t) {
+      if (touches[t] > 0) continue;
+      char where[128];
+      std::snprintf(where, sizeof where, " mm of its target %s (%.3f, %.3f, %.3f)", targets[t].label.c_str(),
+                    targets[t].point.x(), targets[t].point.y(), targets[t].point.z());
+      char reach[32];
+      std::snprintf(reach, sizeof reach, "%g", kTargetReach);
+      untouched = "datum " + datums[s].name + ": no trusted point within " + reach + where;
     }
   }
   double spread = 0.0;
@@ -210,6 +232,7 @@ DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Mode
     frame.reason = why;
     return frame;
   };
+  if (!untouched.empty()) return refuse(untouched);
   for (std::size_t s = 0; s < datums.size(); ++s) {
     const DatumSpec& spec = datums[s];
     const std::string datum = "datum " + spec.name;

@@ -1,13 +1,18 @@
 // The NIST AP242 test parts' semantic PMI: tolerance counts by type and magnitudes as the files state them (the
 // prototypes' figures, as OpenCASCADE's XDE reads them, and NIST's drawings: FTC-06's flatness 0.254 mm on single
 // planes, its perpendicularities 0.3048 mm to A), the toleranced faces tied to the model's, and CTC-02's magnitudes,
-// which OpenCASCADE 7.6 does not read, named instead of given as 0.
+// which OpenCASCADE 7.6 does not read, from the file's own text (or named, never given as 0).
 
 #include "probecomp/cad/pmi.hpp"
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
+#include <set>
+#include <string>
 
 #include "support/data_files.hpp"
 #include "support/light.hpp"
@@ -83,20 +88,58 @@ TEST(Pmi, EveryNistPartReadsItsTolerances) {
 }
 
 // CTC-02 stores its magnitudes in complex entities, which OpenCASCADE 7.6 reads as 0: every one is named as unread.
-TEST(Pmi, MagnitudesOpenCascadeDoesNotReadAreNamedNotZero) {
+// CTC-02 stores every magnitude in a complex entity (LENGTH_MEASURE_WITH_UNIT() MEASURE_REPRESENTATION_ITEM()
+// MEASURE_WITH_UNIT(LENGTH_MEASURE(v), #mm) ...), which OpenCASCADE 7.6 reads as 0: they come from the file's own
+// text. The figures are the file's as read by hand: the flatness 0.05 mm; the 13 surface profiles 0.1, 0.5 (4 of them),
+// 0.75, 0.8 (4) and 2.5 mm (3), the three of 2.5 mm unequally disposed with 0, 0.5 and 2.5 mm outside.
+TEST(Pmi, MagnitudesInComplexEntitiesAreReadFromTheFilesOwnText) {
   const Model model = read_model(kCadDir / "nist_ctc_02_asme1_ap242-e2.stp");
   const Pmi pmi = read_pmi(kCadDir / "nist_ctc_02_asme1_ap242-e2.stp", model);
   ASSERT_EQ(pmi.tolerances.size(), 22u);
   EXPECT_EQ(by_type(pmi)[ToleranceType::ProfileOfSurface], 13);
-  for (const GeometricTolerance& t : pmi.tolerances) EXPECT_FALSE(t.value.has_value());
-  ASSERT_EQ(pmi.warnings.size(), 22u);
-  EXPECT_NE(pmi.warnings[0].find("magnitude was not read"), std::string::npos) << pmi.warnings[0];
+  EXPECT_TRUE(pmi.warnings.empty()) << pmi.warnings.front();
+  std::multiset<double> profiles, outside;
+  for (const GeometricTolerance& t : pmi.tolerances) {
+    ASSERT_TRUE(t.value.has_value()) << to_string(t.type);
+    if (t.type == ToleranceType::Flatness) EXPECT_DOUBLE_EQ(*t.value, 0.05);
+    if (t.type == ToleranceType::ProfileOfSurface) profiles.insert(*t.value);
+    if (t.outside) {
+      EXPECT_EQ(t.type, ToleranceType::ProfileOfSurface);
+      EXPECT_DOUBLE_EQ(*t.value, 2.5);
+      outside.insert(*t.outside);
+    }
+  }
+  EXPECT_EQ(profiles, (std::multiset<double>{0.1, 0.5, 0.5, 0.5, 0.5, 0.75, 0.8, 0.8, 0.8, 0.8, 2.5, 2.5, 2.5}));
+  EXPECT_EQ(outside, (std::multiset<double>{0.0, 0.5, 2.5}));
   // Datum targets (A1, A2, A3) give their datum once, in the frame's order.
   for (const GeometricTolerance& t : pmi.tolerances) {
     for (std::size_t i = 0; i < t.datums.size(); ++i) {
       for (std::size_t j = i + 1; j < t.datums.size(); ++j) EXPECT_NE(t.datums[i], t.datums[j]);
     }
   }
+}
+
+// Where neither OpenCASCADE nor the file's text gives a magnitude (here a unit that is not in the file), the tolerance
+// has none and a warning names it: never a silent 0.
+TEST(Pmi, MagnitudesNeitherReaderGivesAreNamedNotZero) {
+  std::ifstream in(kCadDir / "nist_ctc_02_asme1_ap242-e2.stp", std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Flatness.1's magnitude, #381: its unit made a reference to no instance.
+  const std::size_t at = text.find("#381=(");
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t unit = text.find("LENGTH_MEASURE(0.05),#22285)", at);
+  ASSERT_NE(unit, std::string::npos);
+  text.replace(unit, 28, "LENGTH_MEASURE(0.05),#999999)");
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / "probecomp_pmi_unit_test.stp";
+  std::ofstream(path, std::ios::binary) << text;
+  const Model model = read_model(path);
+  const Pmi pmi = read_pmi(path, model);
+  std::filesystem::remove(path);
+  ASSERT_EQ(pmi.tolerances.size(), 22u);
+  ASSERT_EQ(pmi.warnings.size(), 1u);
+  EXPECT_NE(pmi.warnings[0].find("(flatness, "), std::string::npos) << pmi.warnings[0];
+  EXPECT_NE(pmi.warnings[0].find("its magnitude was not read"), std::string::npos) << pmi.warnings[0];
+  for (const GeometricTolerance& t : pmi.tolerances) EXPECT_EQ(t.value.has_value(), t.type != ToleranceType::Flatness);
 }
 
 TEST(Pmi, IgesAndStepWithoutPmiHaveNone) {

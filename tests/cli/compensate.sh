@@ -133,9 +133,14 @@ json_check "$W/ftc06.json" "len(j['pmi']['tolerances']) == 27 and all(t['value']
   "info --json lists FTC-06's 27 tolerances with their magnitudes" || fail=1
 json_check "$W/ftc06.json" "sum(t['type'] == 'profile of surface' for t in j['pmi']['tolerances']) == 11" \
   "info --json: FTC-06's 11 surface profiles" || fail=1
-"$P" info "$CAD/nist_ctc_02_asme1_ap242-e2.stp" >"$W/ctc02.txt" 2>"$W/ctc02.err" || { echo "FAIL: info ctc02"; fail=1; }
-check "grep -q 'PMI: 22 geometric tolerances.*22 magnitudes not read' '$W/ctc02.txt'" "info names CTC-02's unread magnitudes"
-check "[ \$(grep -c 'its magnitude was not read' '$W/ctc02.err') -eq 22 ]" "one warning for each unread magnitude"
+# CTC-02's magnitudes, which OpenCASCADE reads as 0, from the file's own text (three unequal zones, 0, 0.5 and 2.5 mm
+# of 2.5 outside, as the file states them), and its point datum targets A1-A3, B1-B4 and C1 on the faces they lie on.
+"$P" info "$CAD/nist_ctc_02_asme1_ap242-e2.stp" --json >"$W/ctc02.json" 2>"$W/ctc02.err" || { echo "FAIL: info ctc02"; fail=1; }
+json_check "$W/ctc02.json" "len(j['pmi']['tolerances']) == 22 and all(t['value'] > 0 for t in j['pmi']['tolerances']) and sorted(t['outside'] for t in j['pmi']['tolerances'] if 'outside' in t) == [0, 0.5, 2.5]" \
+  "info --json: CTC-02's 22 magnitudes and its 3 unequal zones, read from the file's text" || fail=1
+json_check "$W/ctc02.json" "{d['name']: len(d['point_targets']) for d in j['pmi']['datum_features'] if d['point_targets']} == {'A': 3, 'B': 4, 'C': 1} and all(t['face'] >= 0 for d in j['pmi']['datum_features'] for t in d['point_targets'])" \
+  "info --json: CTC-02's point datum targets on their faces" || fail=1
+check "! grep -q 'its magnitude was not read' '$W/ctc02.err'" "no magnitude left unread"
 fi
 
 N="$W/demo/nominal.igs"

@@ -325,6 +325,41 @@ TEST(DatumFrame, ThreeTwoOnePointsFixEveryMotion) {
   EXPECT_NEAR(right.max, -0.005, 1e-7);
 }
 
+// Datum A by three point targets on the bottom (A1–A3), which is 0.05 mm up everywhere but at them, where it is
+// 0.01 mm up: A is the plane through the three touches alone, so in A|B|C the top lies 0.01 mm in (a fit of the
+// whole bottom would put it about 0.05 mm in). A target no trusted point touches keeps the frame from being set up.
+TEST(DatumFrame, PointTargetsTakeOnlyTheTouchesAtThem) {
+  const Block& b = block();
+  const std::vector<TargetPoint> targets{{"A1", Point3(5, 5, 0)}, {"A2", Point3(55, 5, 0)}, {"A3", Point3(20, 35, 0)}};
+  Part part;
+  part.bottom = [&](const Point3& p) {
+    for (const TargetPoint& t : targets) {
+      if ((p - t.point).norm() < 1e-9) return Point3(p + Vector3(0, 0, 0.01));
+    }
+    return Point3(p + Vector3(0, 0, 0.05));
+  };
+  const compensation::CompensationResult r = measure(part);
+  Specification spec;
+  spec.datums = {{.name = "A", .faces = {b.bottom}, .fit = DatumFit::LeastSquares, .targets = targets},
+                 {"B", {b.front}}, {"C", {b.left}}};
+  spec.characteristics = {{.name = "P", .faces = {b.top}, .tolerance = 0.1, .outside = {}, .datums = {"A", "B", "C"}}};
+  const Inspection judged = evaluate(spec, b.model, r);
+  const CharacteristicResult& top = judged.characteristics.at(0);
+  ASSERT_NE(top.decision, Decision::NotEvaluated) << top.reason;
+  EXPECT_NEAR(top.min, -0.01, 1e-7);
+  EXPECT_NEAR(top.max, -0.01, 1e-7);
+  const DatumFrame& frame = judged.frames.at("A|B|C");
+  EXPECT_EQ(frame.datums.at(0).points, 3);
+  EXPECT_EQ(frame.datums.at(0).fixes, 3);
+
+  // A3 moved 2.5 mm off the nearest touch.
+  spec.datums[0].targets[2].point = Point3(22.5, 35, 0);
+  const CharacteristicResult off = evaluate(spec, b.model, r).characteristics.at(0);
+  EXPECT_EQ(off.decision, Decision::NotEvaluated);
+  EXPECT_NE(off.reason.find("datum A: no trusted point within 1 mm of its target A3 (22.500, 35.000, 0.000)"),
+            std::string::npos) << off.reason;
+}
+
 TEST(DatumFrame, ItsUncertaintyIsThatOfTheLeastSquaresPlane) {
   // n points with standard uncertainty u on the bottom: the least-squares plane's height at (x, y) has the variance
   // u²(1/n + gᵀS⁻¹g), g = (x − x̄, y − ȳ), S the points' scatter matrix Σ gᵢgᵢᵀ, and the top's

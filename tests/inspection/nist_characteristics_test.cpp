@@ -18,6 +18,7 @@
 #include <set>
 
 #include "probecomp/cad/analytic.hpp"
+#include "probecomp/cad/locator.hpp"
 #include "probecomp/cad/offset_model.hpp"
 #include "probecomp/cad/plan.hpp"
 #include "probecomp/cad/pmi.hpp"
@@ -63,6 +64,14 @@ Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7,
   measured = datum_faces;
   for (const CharacteristicSpec& c : spec.characteristics) measured.insert(c.faces.begin(), c.faces.end());
   std::vector<simulation::ProgrammedPoint> plan = sparse_plan(nominal, measured);
+  // A datum set by point targets is touched at them, as a part program does.
+  const cad::ModelLocator on_nominal(nominal);
+  for (const DatumSpec& d : spec.datums) {
+    for (const TargetPoint& t : d.targets) {
+      const cad::ModelPoint foot = on_nominal.closest_point(t.point);
+      plan.push_back({t.point, foot.normal, foot.face});
+    }
+  }
   // Which frames fix all six motions: set up on the plan's own (nominal) points.
   compensation::CompensationResult exact;
   for (const simulation::ProgrammedPoint& p : plan) {
@@ -73,8 +82,9 @@ Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7,
     q.uncertainty = 0.001;
     exact.points.push_back(q);
   }
-  // A characteristic in a complete frame, on faces that are no datum's, gets a move: a quarter of its zone out, three
-  // quarters (past the limit t/2), or exactly t/2; on a cylinder or sphere only where that stays within 0.3 mm
+  // A characteristic in a complete frame, on faces that are no datum's, gets a move: a quarter of its zone inside its
+  // outer limit (t/2 for an equal zone; CTC-02's unequal ones 0, 0.5 and 2.5 mm), a quarter past it, or exactly at
+  // it; on a cylinder or sphere only where that stays within 0.3 mm
   // (further, a hole's or boss's radius would be off by more than its sparse points are fitted as that element
   // with, and they would not be trusted). In a frame that leaves motions free, its own best fit would take some of a move up: such a
   // characteristic on moved faces is only printed, and one on faces not moved must read 0.
@@ -91,13 +101,14 @@ Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7,
     }
     const DatumFrame frame = establish_frame(order, nominal, exact);
     complete[c.name] = !c.datums.empty() && order.size() == c.datums.size() && frame.fixed() == 6;
-    const double move = std::array{0.25, 0.75, 0.5}[static_cast<std::size_t>(k % 3)] * c.tolerance;
+    const double limit = c.outside.value_or(0.5 * c.tolerance);
+    const double move = limit + std::array{-0.25, 0.25, 0.0}[static_cast<std::size_t>(k % 3)] * c.tolerance;
     bool free = complete[c.name];
     for (int f : c.faces) {
       const cad::Face& face = nominal.faces[static_cast<std::size_t>(f)];
       const bool sized = face.analytic && (face.analytic->surface().kind == cad::ElementaryKind::Cylinder ||
                                            face.analytic->surface().kind == cad::ElementaryKind::Sphere);
-      free = free && !datum_faces.contains(f) && !moved.contains(f) && (!sized || move <= 0.3) && move <= max_move;
+      free = free && !datum_faces.contains(f) && !moved.contains(f) && (!sized || std::abs(move) <= 0.3) && std::abs(move) <= max_move;
     }
     if (!free) continue;
     ++k;
@@ -161,8 +172,10 @@ Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7,
     if (!known) continue;
     EXPECT_NEAR(c.min, t, 0.010) << c.spec.name;
     EXPECT_NEAR(c.max, t, 0.010) << c.spec.name;
-    const double limit = 0.5 * c.spec.tolerance;
-    const Decision expected = t == limit ? Decision::Indeterminate : t > limit ? Decision::DoesNotConform : Decision::Conforms;
+    const double limit = c.outside;  // the zone [outside − t, outside]
+    const Decision expected = t == limit                                     ? Decision::Indeterminate
+                              : t > limit || t < limit - c.spec.tolerance ? Decision::DoesNotConform
+                                                                            : Decision::Conforms;
     EXPECT_EQ(c.decision, expected) << c.spec.name;
   }
   // The whole output in the first complete frame (alignment): every trusted row's deviation is its face's move.
@@ -236,6 +249,17 @@ TEST(NistCharacteristics, StcEightsProfilesAreJudgedInTheirDatumFramesAsTheirMov
   const Judged j = judge_as_moved(test::kCadDir / "nist_stc_08_asme1_ap242-e3.stp", 7, 0.4);
   EXPECT_EQ(j.evaluated, 13);
   EXPECT_LT(j.worst, 0.010);
+}
+
+// CTC-02's magnitudes come from the file's own text (three of its profiles unequally disposed: 0, 0.5 and 2.5 mm of
+// 2.5 outside), and its datums A, B and C are point targets (A1–A3, B1–B4, C1), which the part program touches.
+TEST(NistCharacteristics, CtcTwosProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay) {
+  for (const std::uint64_t seed : test::cases<std::uint64_t>({7, 8, 9})) {
+    SCOPED_TRACE(seed);
+    const Judged j = judge_as_moved(test::kCadDir / "nist_ctc_02_asme1_ap242-e2.stp", seed);
+    EXPECT_EQ(j.evaluated, 14);
+    EXPECT_LT(j.worst, 0.010);
+  }
 }
 
 }  // namespace

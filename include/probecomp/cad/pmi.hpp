@@ -1,7 +1,8 @@
 #pragma once
 // The geometric tolerances and datums a STEP AP242 file carries as semantic PMI (GD&T), as OpenCASCADE's XDE reads
-// them, tied to the model's faces. A tolerance whose magnitude OpenCASCADE does not read (7.6 reads 0 where the file
-// stores it in a complex entity: NIST CTC-02) has none, and a warning names it: never a silent 0.
+// them, tied to the model's faces. Where OpenCASCADE reads no magnitude (7.6 reads 0 where the file stores it in a
+// complex entity: NIST CTC-02) it is read from the file's own text; a tolerance whose magnitude neither gives has
+// none, and a warning names it: never a silent 0.
 
 #include <filesystem>
 #include <optional>
@@ -21,16 +22,28 @@ enum class ToleranceType {
 struct GeometricTolerance {
   ToleranceType type = ToleranceType::Other;
   std::optional<double> value;      // the zone's width, mm; none where the file's could not be read
+  // An unequally disposed zone (UZ): how far it reaches outside the material, mm (equal: none, value / 2).
+  std::optional<double> outside;
   std::vector<int> faces;           // the toleranced faces (positions in the model's faces)
   std::vector<std::string> datums;  // the datum reference frame, primary first (each name once)
+};
+
+// A point datum target (A1, A2, ...) as the file places it: where the datum simulator touches the part.
+struct DatumTargetPoint {
+  int number = 0;             // A1: 1
+  Point3 point = Point3::Zero();  // the model's coordinates, mm
+  int face = -1;              // the face it lies on (position in the model's faces)
 };
 
 // A datum as the file defines it: the faces of its datum feature, or datum targets.
 struct DatumFeature {
   std::string name;
-  std::vector<int> faces;  // the datum feature's faces (positions in the model's faces), sorted
-  // Datum targets (A1, A2, ...): points, lines or areas on the part rather than a whole feature. Areas tie to faces
-  // like a feature; points and lines do not, and are counted here.
+  // The datum feature's faces (positions in the model's faces), sorted; with point targets, the faces they lie on.
+  std::vector<int> faces;
+  // Datum targets: points, lines or areas on the part rather than a whole feature. Areas tie to faces like a
+  // feature; points are placed (`targets`, in number order) where the file places them on a face; lines, and points
+  // it does not place on one, are counted in `point_or_line_targets` and not used.
+  std::vector<DatumTargetPoint> targets;
   int point_or_line_targets = 0;
   int area_targets = 0;
 };
