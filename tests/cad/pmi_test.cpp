@@ -119,17 +119,25 @@ TEST(Pmi, MagnitudesInComplexEntitiesAreReadFromTheFilesOwnText) {
   }
 }
 
-// Where neither OpenCASCADE nor the file's text gives a magnitude (here a unit that is not in the file), the tolerance
-// has none and a warning names it: never a silent 0.
-TEST(Pmi, MagnitudesNeitherReaderGivesAreNamedNotZero) {
+// The file's text read as written: CTC-02 with two magnitudes changed. Flatness.1's (#381) refers to a unit that is
+// not in the file: that tolerance has none, and a warning names it (never a silent 0). Position.3's (#362, 0.05 mm)
+// becomes 0.002 of an inch, a conversion-based unit of 25.4 mm: 0.0508 mm.
+TEST(Pmi, MagnitudesAreReadInTheirUnitsOrNamedNotZero) {
   std::ifstream in(kCadDir / "nist_ctc_02_asme1_ap242-e2.stp", std::ios::binary);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  // Flatness.1's magnitude, #381: its unit made a reference to no instance.
-  const std::size_t at = text.find("#381=(");
-  ASSERT_NE(at, std::string::npos);
-  const std::size_t unit = text.find("LENGTH_MEASURE(0.05),#22285)", at);
-  ASSERT_NE(unit, std::string::npos);
-  text.replace(unit, 28, "LENGTH_MEASURE(0.05),#999999)");
+  const auto replace = [&](const std::string& instance, const std::string& from, const std::string& to) {
+    const std::size_t at = text.find(instance);
+    ASSERT_NE(at, std::string::npos) << instance;
+    const std::size_t where = text.find(from, at);
+    ASSERT_NE(where, std::string::npos) << from;
+    text.replace(where, from.size(), to);
+  };
+  replace("#381=(", "LENGTH_MEASURE(0.05),#22285)", "LENGTH_MEASURE(0.05),#999999)");
+  replace("#362=(", "LENGTH_MEASURE(0.05),#22285)", "LENGTH_MEASURE(0.002),#999990)");
+  const std::size_t end = text.rfind("ENDSEC;");
+  ASSERT_NE(end, std::string::npos);
+  text.insert(end, "#999990=(CONVERSION_BASED_UNIT('INCH',#999991) LENGTH_UNIT() NAMED_UNIT(*));\n"
+                   "#999991=LENGTH_MEASURE_WITH_UNIT(LENGTH_MEASURE(25.4),#22285);\n");
   const std::filesystem::path path = std::filesystem::temp_directory_path() / "probecomp_pmi_unit_test.stp";
   std::ofstream(path, std::ios::binary) << text;
   const Model model = read_model(path);
@@ -139,7 +147,14 @@ TEST(Pmi, MagnitudesNeitherReaderGivesAreNamedNotZero) {
   ASSERT_EQ(pmi.warnings.size(), 1u);
   EXPECT_NE(pmi.warnings[0].find("(flatness, "), std::string::npos) << pmi.warnings[0];
   EXPECT_NE(pmi.warnings[0].find("its magnitude was not read"), std::string::npos) << pmi.warnings[0];
-  for (const GeometricTolerance& t : pmi.tolerances) EXPECT_EQ(t.value.has_value(), t.type != ToleranceType::Flatness);
+  std::multiset<double> positions;
+  for (const GeometricTolerance& t : pmi.tolerances) {
+    EXPECT_EQ(t.value.has_value(), t.type != ToleranceType::Flatness);
+    if (t.type == ToleranceType::Position) positions.insert(*t.value);
+  }
+  EXPECT_EQ(positions.size(), 4u);
+  EXPECT_NEAR(*positions.begin(), 0.0508, 1e-12);
+  EXPECT_EQ(*std::next(positions.begin()), 0.15);
 }
 
 TEST(Pmi, IgesAndStepWithoutPmiHaveNone) {
