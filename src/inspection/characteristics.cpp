@@ -90,6 +90,16 @@ Specification read_specification(const std::filesystem::path& path, const cad::M
         } else if (fit != "least-squares") {
           bad(path, where + ": unknown fit \"" + fit + "\" (expected least-squares or tangent)");
         }
+        if (d.contains("targets")) {
+          // Point targets, [x, y, z] in the model's mm: NAME1, NAME2, ... in their order.
+          if (!d["targets"].is_array() || d["targets"].empty()) bad(path, where + ": \"targets\" must be a list of [x, y, z]");
+          for (const nlohmann::json& t : d["targets"]) {
+            if (!t.is_array() || t.size() != 3) bad(path, where + ": a target must be [x, y, z] (mm)");
+            const Point3 at(t[0].get<double>(), t[1].get<double>(), t[2].get<double>());
+            if (!at.allFinite()) bad(path, where + ": a target's coordinates must be finite");
+            datum.targets.push_back({name + std::to_string(datum.targets.size() + 1), at});
+          }
+        }
         spec.datums.push_back(std::move(datum));
       } catch (const nlohmann::json::exception& e) {
         bad(path, where + ": " + e.what());
