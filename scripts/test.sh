@@ -38,6 +38,11 @@ if [ "${1:-}" = "--sanitize" ]; then
     Pipeline.ThreeThousandRandomPointsAtLowNoiseKeepEveryRow            # Pipeline.RandomShuffledPointsWithout...
     FreeformStudy.UncertaintyCoversTheTrueErrorOnThePanelAndInEachRegion_RandomPointsLowNoise  # FreeformStudy.APoint...
     package.consumer    # an outside project built against the installed package: its code is the library's, run here
+    NistCharacteristics.CtcTwosProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay  # NistCharacteristics.Stc*, Ftc*
+                                                                        #   (the frames and characteristics; point
+                                                                        #   targets in DatumFrame.PointTargets...)
+    Pmi.MagnitudesAreReadInTheirUnitsOrNamedNotZero                     # Pmi.MagnitudesInComplexEntities... (the same
+                                                                        #   reader on the same file), fuzz_cad_step
   )
   exclude=(-E "^($(IFS='|'; echo "${release_only[*]}"))\$")
 fi
