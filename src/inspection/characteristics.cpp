@@ -181,7 +181,7 @@ Specification from_pmi(const cad::Pmi& pmi, int& skipped) {
     s.tolerance = t.value.value_or(0.0);
     if (t.type == cad::ToleranceType::ProfileOfSurface) {
       s.datums = t.datums;
-      if (t.outside && t.value && *t.outside >= 0.0 && *t.outside <= *t.value) s.outside = t.outside;
+      s.outside = t.outside;  // within [0, value]: read_pmi refuses a displacement beyond it, with its value
     }
     spec.characteristics.push_back(std::move(s));
   }
