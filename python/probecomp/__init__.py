@@ -116,7 +116,7 @@ class FitResult(CompensationResult):
 
 
 def _run(model, centres, probe_radius, normals, method, units, initial_transform, accept_doubtful_registration,
-         tolerance, fit, qualification=None, styli=None):
+         tolerance, fit, qualification=None, styli=None, characteristics=None):
     if not isinstance(model, CadModel):
         raise ValueError("model must be a probecomp.CadModel, not %s" % type(model).__name__)
     scale = _scale(units)
@@ -146,12 +146,14 @@ def _run(model, centres, probe_radius, normals, method, units, initial_transform
             raise ValueError("styli must name one stylus per centre: %d for %d" % (len(styli), len(centres)))
     run = _core.compensate(model, centres, radii, default, normals, method, initial_transform,
                            bool(accept_doubtful_registration), fit, "<numpy array>", units,
-                           "" if qualification is None else str(qualification), styli or [])
+                           "" if qualification is None else str(qualification), styli or [],
+                           "" if characteristics is None else str(characteristics))
     return (FitResult if fit else CompensationResult)(run, scale, tolerance)
 
 
 def compensate(model, centres, probe_radius=None, normals=None, method="cad", *, units="mm", initial_transform=None,
-               accept_doubtful_registration=False, tolerance=None, qualification=None, styli=None):
+               accept_doubtful_registration=False, tolerance=None, qualification=None, styli=None,
+               characteristics=None):
     """Compensates probe centres for the tip radius against the part's CAD model: `probecomp compensate`.
 
     model           CadModel: the part's nominal faces (STEP or IGES)
@@ -171,13 +173,16 @@ def compensate(model, centres, probe_radius=None, normals=None, method="cad", *,
                     radius in the direction it was touched from (-normals, else against the fitted normal), and its
                     uncertainty joins u; probe_radius is then only the default for styli the file does not hold
     styli           with qualification: each centre's stylus name (N str); None when the file qualifies one stylus
+    characteristics optional specification as for judge() (a path, or "pmi"): where the best fit of all the points is
+                    doubtful, its datum features' points locate the part alone, as `compensate --characteristics`
+                    does (stats["registration"]["located_by"] says which); judge the result with the same one
 
     Returns a CompensationResult (see its help). The work runs with the GIL released.
     Raises InputError (points or options the method cannot use), CadError, RegistrationError (the points could not
     be registered credibly), ValueError (arguments of the wrong shape or kind).
     """
     return _run(model, centres, probe_radius, normals, method, units, initial_transform,
-                accept_doubtful_registration, tolerance, False, qualification, styli)
+                accept_doubtful_registration, tolerance, False, qualification, styli, characteristics)
 
 
 def fit(model, centres, probe_radius=None, normals=None, *, units="mm", initial_transform=None,

@@ -77,7 +77,8 @@ def compensate(model: CadModel, centres: ArrayLike, probe_radius: Union[float, A
                normals: Optional[ArrayLike] = ..., method: str = ..., *, units: str = ...,
                initial_transform: Optional[ArrayLike] = ..., accept_doubtful_registration: bool = ...,
                tolerance: Tolerance = ..., qualification: Optional[Path] = ...,
-               styli: Optional[Sequence[str]] = ...) -> CompensationResult: ...
+               styli: Optional[Sequence[str]] = ...,
+               characteristics: Optional[Path] = ...) -> CompensationResult: ...
 def fit(model: CadModel, centres: ArrayLike, probe_radius: Union[float, ArrayLike, None] = ...,
         normals: Optional[ArrayLike] = ..., *, units: str = ..., initial_transform: Optional[ArrayLike] = ...,
         accept_doubtful_registration: bool = ..., tolerance: Tolerance = ...) -> FitResult: ...

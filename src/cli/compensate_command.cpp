@@ -161,11 +161,14 @@ Loaded load(const std::string& cad_path, const std::string& points_path, std::op
   return l;
 }
 
+// `datum_faces`: the specification's datum features' faces, which locate the part when the best fit of all its
+// points is doubtful (compensation::RegisterOptions::datum_faces).
 compensation::CompensationResult run_pipeline(const Loaded& l, compensation::Method method, bool accept_doubtful,
-                                              io::ProgressBar& bar) {
+                                              io::ProgressBar& bar, std::vector<int> datum_faces = {}) {
   compensation::CompensateOptions o;
   o.method = method;
   o.accept_doubtful_registration = accept_doubtful;
+  o.datum_faces = std::move(datum_faces);
   o.probe_radius = l.inputs.tip_radii.front();
   o.probe_radii = l.radii;
   if (l.qualification) {
@@ -313,7 +316,8 @@ int run_compensate(const CompensateArgs& a) {
     spec = inspection::read_specification(a.characteristics, l.model);
   }
   const compensation::Method method = a.method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
-  const compensation::CompensationResult r = run_pipeline(l, method, a.accept_doubtful_registration, bar);
+  const compensation::CompensationResult r =
+      run_pipeline(l, method, a.accept_doubtful_registration, bar, inspection::datum_faces(spec));
   const inspection::Inspection judged = inspection::evaluate(spec, l.model, r);
   // One line each on standard error, even with --quiet: the decisions are what the run was for.
   for (const inspection::CharacteristicResult& c : judged.characteristics) {

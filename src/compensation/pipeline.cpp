@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "probecomp/compensation/conventional.hpp"
@@ -47,6 +49,45 @@ void check_registration(const registration::RegistrationResult& r) {
     throw RegistrationError(std::string("registration failed (") + registration::to_string(r.status) + "): " +
                                 r.stop_reason);
   }
+}
+
+int located_count(const registration::RegistrationResult& r) {
+  return static_cast<int>(std::count_if(r.located_by.begin(), r.located_by.end(), [](std::uint8_t f) { return f != 0; }));
+}
+
+// The part located by the points on its datum features alone, from `start` (RegisterOptions::datum_faces): kept when
+// it converged, is credible on those points and they fix all six motions; else nothing, with why in `why_not`.
+std::optional<registration::RegistrationResult> locate_by_datum_features(const PreparedModel& prepared,
+                                                                         std::span<const Point3> raw,
+                                                                         const geometry::RigidTransform& start,
+                                                                         const RegisterOptions& options,
+                                                                         std::string& why_not) {
+  std::vector<int> positions;  // in the offset model's faces
+  const std::vector<cad::Face>& faces = prepared.offset->model.faces;
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    if (std::find(options.datum_faces.begin(), options.datum_faces.end(), faces[f].index) != options.datum_faces.end()) {
+      positions.push_back(static_cast<int>(f));
+    }
+  }
+  registration::RegistrationOptions icp = options.icp;
+  icp.initial = start;
+  const std::vector<double> beyond = prepared.radii.beyond_smallest();
+  registration::RegistrationResult r =
+      registration::register_by_faces(*prepared.offset, *prepared.locator, raw, positions, icp, beyond);
+  if (!r.converged()) {
+    why_not = "did not converge: " + r.stop_reason;
+    return std::nullopt;
+  }
+  if (!r.constraints.complete()) {
+    why_not = "fixes " + std::to_string(r.constraints.fixed) + " of the 6 motions only";
+    return std::nullopt;
+  }
+  const registration::Credibility verdict = registration::assess_registration(r, prepared.radii);
+  if (!verdict.ok()) {
+    why_not = "is not credible either: " + verdict.reason;
+    return std::nullopt;
+  }
+  return r;
 }
 
 }  // namespace
@@ -171,12 +212,26 @@ registration::RegistrationResult register_centres(const PreparedModel& prepared,
     moved = true;
   }
   best.starts = starts;
-  const std::string tried = std::to_string(starts - 1) + " starts of a coarse alignment (ICP from the model turned " +
-                            "about the points' principal axes)";
+  std::string tried = std::to_string(starts - 1) + " starts of a coarse alignment (ICP from the model turned " +
+                      "about the points' principal axes)";
   if (verdict.ok()) {
     best.notes.push_back("the registration from the given start was not credible (" + first.reason + "); " + tried +
                          " found a credible one");
     return best;
+  }
+  if (!options.datum_faces.empty()) {
+    std::string why_not;
+    std::optional<registration::RegistrationResult> by_datums =
+        locate_by_datum_features(prepared, raw, best.transform, options, why_not);
+    if (by_datums) {
+      by_datums->starts = starts;
+      by_datums->notes.push_back("the best fit of all the points was not credible (" + verdict.reason + "; " + tried +
+                                 " found none credible): the part was located by the " + std::to_string(located_count(*by_datums)) +
+                                 " points on its datum features alone, as its drawing does; the other faces' deviations "
+                                 "are from there");
+      return *std::move(by_datums);
+    }
+    tried += "; located by its datum features' points alone, " + why_not;
   }
   // Nothing fits better: the figures may be the part's own form error, unless the data hardly touch the model or
   // most of them sit on its wrong side, where no deviation can be trusted.
@@ -247,18 +302,27 @@ CompensationResult compensate_conventional(const cad::Model& model, std::span<co
 // (The first-order estimate and kMaxSkippedShare: registration/sensitivity.hpp.)
 void register_without_outliers(const PreparedModel& prepared, std::span<const Point3> raw, const FitResult& fits,
                                const registration::RegistrationOptions& icp, registration::RegistrationResult& r) {
+  // A part located by its datum features' points (register_centres) stays located by them: only theirs pull.
+  const bool by_features = !r.located_by.empty();
   std::vector<std::size_t> flagged;
   for (const FaceFit& ff : fits.faces) {
     for (std::size_t i = 0; i < ff.trusted.size(); ++i) {
-      if (!ff.trusted[i]) flagged.push_back(ff.members[i]);
+      if (!ff.trusted[i] && (!by_features || r.located_by[ff.members[i]] != 0)) flagged.push_back(ff.members[i]);
     }
   }
   if (flagged.empty() || !registration::leaving_out_moves(*prepared.locator, raw, icp, r, flagged)) return;
-  std::vector<Point3> kept(raw.begin(), raw.end());
-  // Not finite: reported by ICP, never used.
-  for (const std::size_t k : flagged) kept[k] = Point3::Constant(std::numeric_limits<double>::quiet_NaN());
   registration::RegistrationOptions again = icp;
   again.initial = r.transform;
+  std::vector<Point3> kept(raw.begin(), raw.end());
+  std::vector<std::uint8_t> locating;
+  if (by_features) {
+    locating = r.located_by;
+    for (const std::size_t k : flagged) locating[k] = 0;
+    again.located_by = locating;
+  } else {
+    // Not finite: reported by ICP, never used.
+    for (const std::size_t k : flagged) kept[k] = Point3::Constant(std::numeric_limits<double>::quiet_NaN());
+  }
   registration::RegistrationResult second = registration::register_to_offset_model(
       *prepared.offset, *prepared.locator, kept, again, prepared.radii.beyond_smallest());
   if (!second.converged()) return;
@@ -322,7 +386,8 @@ CompensationResult compensate_with_radii(const cad::Model& model, std::span<cons
       model, radii, raw, approach_normals, {.offset = options.offset, .initial = options.registration.initial},
       {.icp = options.registration,
        .max_initial_distance_fraction = options.max_initial_distance_fraction,
-       .accept_doubtful = options.accept_doubtful_registration});
+       .accept_doubtful = options.accept_doubtful_registration,
+       .datum_faces = options.datum_faces});
   PreparedModel& prepared = located.prepared;
   out.registration = std::move(located.registration);
   out.seconds.prepare = prepared.seconds;

@@ -152,6 +152,12 @@ Specification read_specification(const std::filesystem::path& path, const cad::M
   return spec;
 }
 
+std::vector<int> datum_faces(const Specification& spec) {
+  std::set<int> faces;
+  for (const DatumSpec& d : spec.datums) faces.insert(d.faces.begin(), d.faces.end());
+  return {faces.begin(), faces.end()};
+}
+
 Specification from_pmi(const cad::Pmi& pmi, int& skipped) {
   Specification spec;
   for (const cad::DatumFeature& d : pmi.datum_features) {

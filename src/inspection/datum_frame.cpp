@@ -310,14 +310,34 @@ compensation::CompensationResult aligned(const compensation::CompensationResult&
   compensation::CompensationResult out = result;
   out.registration.transform = frame.transform;
   const geometry::RigidTransform to_cad = frame.transform.inverse();
+  // Each row's deviation from its own face, as the compensation took it: a face that deviates by about its distance
+  // from another (STC-08's moved 1.14 mm) has its contacts as near to that one, and the nearest face would read it.
+  std::map<int, std::size_t> position;  // face index -> position in nominal.faces
+  for (std::size_t f = 0; f < nominal.faces.size(); ++f) position.emplace(nominal.faces[f].index, f);
+  std::map<int, std::vector<std::size_t>> rows_of;  // by position in nominal.faces
+  for (std::size_t k = 0; k < result.points.size(); ++k) {
+    const auto at = position.find(result.points[k].face);
+    if (!result.points[k].computed()) continue;
+    if (at != position.end()) {
+      rows_of[static_cast<int>(at->second)].push_back(k);
+    } else {
+      out.points[k].deviation = std::numeric_limits<double>::quiet_NaN();  // no face of this model: nothing to say
+    }
+  }
   std::vector<Point3> points;
   std::vector<std::size_t> rows;
-  for (std::size_t k = 0; k < result.points.size(); ++k) {
-    if (!result.points[k].computed()) continue;
-    points.push_back(to_cad * result.points[k].contact);
-    rows.push_back(k);
+  std::vector<cad::ModelPoint> feet;
+  for (const auto& [f, face_rows] : rows_of) {
+    const std::size_t first = points.size();
+    for (const std::size_t k : face_rows) {
+      points.push_back(to_cad * result.points[k].contact);
+      rows.push_back(k);
+    }
+    const cad::Model own = faces_of(nominal, {f});
+    const std::vector<cad::ModelPoint> on_face =
+        cad::ModelLocator(own).closest_points(std::span<const Point3>(points).subspan(first));
+    feet.insert(feet.end(), on_face.begin(), on_face.end());
   }
-  const std::vector<cad::ModelPoint> feet = cad::ModelLocator(nominal).closest_points(points);
   for (std::size_t i = 0; i < rows.size(); ++i) {
     compensation::CompensatedPoint& p = out.points[rows[i]];
     p.deviation = feet[i].ok() ? feet[i].distance : std::numeric_limits<double>::quiet_NaN();

@@ -106,21 +106,23 @@ struct Run {
 
 // As compensate --characteristics: a specification file, or "pmi" for the model's STEP file's own, judged on the
 // run's points.
-inspection::Inspection judge(const Run& r, const cad::Model& model, const std::string& characteristics) {
-  inspection::Specification spec;
+inspection::Specification specification(const cad::Model& model, const std::string& characteristics) {
   if (characteristics == "pmi") {
     int skipped = 0;
-    spec = inspection::from_pmi(cad::read_pmi(model.path, model), skipped);
-  } else {
-    spec = inspection::read_specification(characteristics, model);
+    return inspection::from_pmi(cad::read_pmi(model.path, model), skipped);
   }
-  return inspection::evaluate(spec, model, r.result);
+  return inspection::read_specification(characteristics, model);
+}
+
+inspection::Inspection judge(const Run& r, const cad::Model& model, const std::string& characteristics) {
+  return inspection::evaluate(specification(model, characteristics), model, r.result);
 }
 
 Run run_compensate(const cad::Model& model, const Array& centres, const Array& radii, std::optional<double> probe_radius,
                    const std::optional<Array>& normals, const std::string& method, const std::optional<Array>& initial,
                    bool accept_doubtful, bool fit, const std::string& points_name, const std::string& unit,
-                   const std::string& qualification, const std::vector<std::string>& styli) {
+                   const std::string& qualification, const std::vector<std::string>& styli,
+                   const std::string& characteristics) {
   const std::span<const Point3> points = as_points(centres, "centres");
   std::optional<std::span<const Vector3>> approach;
   if (normals) {
@@ -136,6 +138,8 @@ Run run_compensate(const cad::Model& model, const Array& centres, const Array& r
   }
   o.method = method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
   o.accept_doubtful_registration = accept_doubtful;
+  // As compensate --characteristics: the datum features locate a part whose best fit is doubtful.
+  if (!characteristics.empty()) o.datum_faces = inspection::datum_faces(specification(model, characteristics));
   Run run;
   run.inputs.cad = model.path.string();
   run.inputs.points = points_name;
@@ -394,7 +398,8 @@ PYBIND11_MODULE(_probecomp, m) {
 
   m.def("compensate", &run_compensate, py::arg("model"), py::arg("centres"), py::arg("radii"), py::arg("probe_radius"),
         py::arg("normals"), py::arg("method"), py::arg("initial_transform"), py::arg("accept_doubtful_registration"),
-        py::arg("fit"), py::arg("points_name"), py::arg("unit"), py::arg("qualification"), py::arg("styli"));
+        py::arg("fit"), py::arg("points_name"), py::arg("unit"), py::arg("qualification"), py::arg("styli"),
+        py::arg("characteristics"));
 
   m.def("parse_tolerance", [](const std::string& text) {
     results::Tolerance t;

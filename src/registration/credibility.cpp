@@ -30,6 +30,9 @@ double scored(const PointMatch& m, double r) {
   return std::min(std::abs(m.distance), r);
 }
 
+// Only the points that located the part are judged: the others may be far off by the part's own deviations.
+bool locates(const RegistrationResult& r, std::size_t k) { return r.located_by.empty() || r.located_by[k] != 0; }
+
 }  // namespace
 
 Credibility assess_registration(const RegistrationResult& r, const geometry::TipRadii& radii) {
@@ -37,13 +40,16 @@ Credibility assess_registration(const RegistrationResult& r, const geometry::Tip
   c.scale = r.scale;
   const double probe_radius = radii.smallest();
   std::size_t used = 0, inside = 0;
+  std::size_t locating = 0;
   for (std::size_t k = 0; k < r.matches.size(); ++k) {
+    if (!locates(r, k)) continue;
+    ++locating;
     const PointMatch& m = r.matches[k];
     if (!m.ok() || m.on_edge) continue;
     ++used;
     inside += m.distance < -0.5 * radii[k];
   }
-  const std::size_t n = std::max<std::size_t>(r.matches.size(), 1);
+  const std::size_t n = std::max<std::size_t>(locating, 1);
   c.overlap = static_cast<double>(used) / static_cast<double>(n);
   c.inside_share = used > 0 ? static_cast<double>(inside) / static_cast<double>(used) : 0.0;
   if (c.overlap < kMinOverlap) {
@@ -65,7 +71,9 @@ Credibility assess_registration(const RegistrationResult& r, const geometry::Tip
 double registration_score(const RegistrationResult& r, const geometry::TipRadii& radii) {
   std::vector<double> residuals;
   residuals.reserve(r.matches.size());
-  for (std::size_t k = 0; k < r.matches.size(); ++k) residuals.push_back(scored(r.matches[k], radii[k]));
+  for (std::size_t k = 0; k < r.matches.size(); ++k) {
+    if (locates(r, k)) residuals.push_back(scored(r.matches[k], radii[k]));
+  }
   return residuals.empty() ? radii.smallest() : geometry::median_in_place(residuals);
 }
 
@@ -80,6 +88,10 @@ CoarseAlignment coarse_align(const cad::ModelLocator& offset_model, std::span<co
     if (!radii.uniform()) beyond.push_back(radii[k] - radii.smallest());
   }
   const geometry::TipRadii subset_radii = radii.subset(chosen);
+  std::vector<std::uint8_t> subset_located_by;
+  for (std::size_t k : chosen) {
+    if (!options.located_by.empty()) subset_located_by.push_back(options.located_by[k]);
+  }
   CoarseAlignment best;
   best.transform = options.initial;
   if (subset.size() < 6) return best;
@@ -101,6 +113,7 @@ CoarseAlignment coarse_align(const cad::ModelLocator& offset_model, std::span<co
   }
   RegistrationOptions o = options;
   o.criteria.max_iterations = coarse.max_iterations;
+  o.located_by = subset_located_by;
   best.score = std::numeric_limits<double>::infinity();
   for (const geometry::RigidTransform& start : starts) {
     o.initial = start;

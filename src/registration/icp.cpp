@@ -257,8 +257,13 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
     result.iterations = it;
     if (used < needed) {
       result.status = Status::TooFewPoints;
-      result.stop_reason = "only " + std::to_string(used) + " of " + std::to_string(n) +
-                           " points have a usable correspondence (not on a face edge, found, finite)";
+      const std::size_t locating = options.located_by.empty()
+                                       ? n
+                                       : static_cast<std::size_t>(std::count_if(options.located_by.begin(), options.located_by.end(),
+                                                                                [](std::uint8_t f) { return f != 0; }));
+      result.stop_reason = "only " + std::to_string(used) + " of " + std::to_string(locating) +
+                           (options.located_by.empty() ? " points" : " points that locate the part") +
+                           " have a usable correspondence (not on a face edge, found, finite)";
       break;
     }
     if (it == 1) frame = detail::DataFrame::of(state.points());
@@ -306,6 +311,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   }
   result.transform = to_cad.inverse();
   state.finish(result);
+  result.located_by.assign(options.located_by.begin(), options.located_by.end());
   return result;
 }
 }  // namespace
@@ -316,6 +322,9 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
   if (!offsets.empty() && offsets.size() != n) {
     throw std::invalid_argument("register_points: one offset per point expected");
   }
+  if (!options.located_by.empty() && options.located_by.size() != n) {
+    throw std::invalid_argument("register_points: one located_by flag per point expected");
+  }
   const std::size_t subset_size = std::min(kCoarseStagePoints, n / 4);
   if (subset_size < kMinCoarseStagePoints) return iterate(model, machine_points, options, {}, offsets);
   // Coarse stage: a spread subset (every k-th point) brings the model close, where closest points are cheap.
@@ -324,12 +333,15 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
   const std::size_t stride = n / subset_size;
   std::vector<Point3> subset;
   std::vector<double> subset_offsets;
+  std::vector<std::uint8_t> subset_located_by;
   for (std::size_t i = 0; i < n; i += stride) {
     if (!machine_points[i].allFinite()) continue;
     subset.push_back(machine_points[i]);
     if (!offsets.empty()) subset_offsets.push_back(offsets[i]);
+    if (!options.located_by.empty()) subset_located_by.push_back(options.located_by[i]);
   }
   RegistrationOptions coarse_options = options;
+  coarse_options.located_by = subset_located_by;
   coarse_options.criteria.relative_motion_tolerance *= kCoarseToleranceFactor;
   // The subset's k-d tree (for the hints below) is built while the coarse stage runs: it needs only the points.
   RegistrationResult coarse;
@@ -389,6 +401,17 @@ RegistrationResult register_points(const cad::ModelLocator& model, std::span<con
   RegistrationResult result = iterate(model, machine_points, full, std::move(hints), offsets);
   result.coarse_iterations = coarse.iterations;
   return result;
+}
+
+std::vector<PointMatch> matches_at(const cad::ModelLocator& model, std::span<const Point3> machine_points,
+                                   const geometry::RigidTransform& transform, std::span<const double> offsets) {
+  if (!offsets.empty() && offsets.size() != machine_points.size()) {
+    throw std::invalid_argument("matches_at: one offset per point expected");
+  }
+  RegistrationOptions still;
+  still.initial = transform;
+  still.criteria.max_iterations = 0;  // no step: the exact pass at the start is the answer
+  return iterate(model, machine_points, still, {}, offsets).matches;
 }
 
 }  // namespace probecomp::registration

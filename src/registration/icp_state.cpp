@@ -153,7 +153,7 @@ std::size_t IcpState::correspondences(const geometry::RigidTransform& to_cad, Se
         moved_[i].distance -= offsets_[i];
       }
       const cad::ModelPoint& m = targets[i];
-      use_[i] = x_[i].allFinite() && usable(m, options_.max_distance);
+      use_[i] = x_[i].allFinite() && usable(m, options_.max_distance) && locates(i);
       r_[i] = !use_[i] ? 0.0 : options_.metric == Metric::PointToPlane ? m.distance : (x_[i] - m.point).norm();
     }
   });
@@ -181,7 +181,7 @@ std::size_t IcpState::slide(const geometry::RigidTransform& motion) {
       // finds it again (a search more, not a different answer).
       const bool inside = u > dom.u0 && u < dom.u1 && v > dom.v0 && v < dom.v1 &&
                           (!face.trimmed() || face.trim->contains(u, v));
-      use_[i] = x_[i].allFinite() && inside && std::abs(p.distance) <= options_.max_distance;
+      use_[i] = x_[i].allFinite() && inside && std::abs(p.distance) <= options_.max_distance && locates(i);
       r_[i] = use_[i] ? p.distance : 0.0;
     }
   }, kEvaluatingGrain);

@@ -71,6 +71,8 @@ class IcpState {
   std::size_t robust_weights();
   // Each target's patch from the surface's derivatives at its foot; `missing_only`: only where the search gave none.
   void osculating_patches(bool missing_only);
+  // The point may locate the part (RegistrationOptions::located_by).
+  [[nodiscard]] bool locates(std::size_t i) const { return options_.located_by.empty() || options_.located_by[i] != 0; }
 
   const cad::ModelLocator& model_;
   std::span<const Point3> machine_points_;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -151,6 +152,11 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
                        {"inliers", reg.inliers},
                        {"starts", reg.starts},
                        {"left_out", reg.left_out},
+                       {"located_by", reg.located_by.empty() ? "all-points" : "datum-features"},
+                       {"locating_points", reg.located_by.empty()
+                                               ? static_cast<long>(reg.matches.size())
+                                               : static_cast<long>(std::count_if(reg.located_by.begin(), reg.located_by.end(),
+                                                                                 [](std::uint8_t f) { return f != 0; }))},
                        {"free_motions", free}};
 
   Json faces = Json::array();

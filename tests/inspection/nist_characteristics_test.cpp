@@ -12,7 +12,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -51,10 +50,10 @@ std::vector<simulation::ProgrammedPoint> sparse_plan(const cad::Model& model, co
 struct Judged {
   int evaluated = 0;
   double worst = 0.0, worst_in_u = 0.0;
+  bool by_datums = false;  // the part was located by its datum features' points alone (the best fit was doubtful)
 };
 
-Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7,
-                      double max_move = std::numeric_limits<double>::infinity()) {
+Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7) {
   const cad::Model nominal = cad::read_model(file);
   const cad::Pmi pmi = cad::read_pmi(file, nominal);
   int skipped = 0;
@@ -108,7 +107,7 @@ Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7,
       const cad::Face& face = nominal.faces[static_cast<std::size_t>(f)];
       const bool sized = face.analytic && (face.analytic->surface().kind == cad::ElementaryKind::Cylinder ||
                                            face.analytic->surface().kind == cad::ElementaryKind::Sphere);
-      free = free && !datum_faces.contains(f) && !moved.contains(f) && (!sized || std::abs(move) <= 0.3) && std::abs(move) <= max_move;
+      free = free && !datum_faces.contains(f) && !moved.contains(f) && (!sized || std::abs(move) <= 0.3);
     }
     if (!free) continue;
     ++k;
@@ -148,11 +147,14 @@ Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7,
   }
   compensation::CompensateOptions options;
   options.probe_radius = 1.0;
+  options.datum_faces = inspection::datum_faces(spec);
   const compensation::CompensationResult result = compensation::compensate(nominal, centres, normals, options);
   const Inspection judged = evaluate(spec, nominal, result);
   std::printf("%zu touches on %zu faces, %zu characteristics, %zu datums fitted\n", centres.size(), measured.size(),
               judged.characteristics.size(), judged.datums.size());
+  for (const std::string& note : result.registration.notes) std::printf("registration: %s\n", note.c_str());
   Judged out;
+  out.by_datums = !result.registration.located_by.empty();
   for (const CharacteristicResult& c : judged.characteristics) {
     const std::optional<double> known = truth.at(c.spec.name);
     const double t = known.value_or(NAN);
@@ -192,7 +194,7 @@ Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7,
     for (const compensation::CompensatedPoint& p : in_frame.points) {
       if (p.status != compensation::PointStatus::Ok) continue;
       const double move = moved.contains(p.face) ? moved.at(p.face) : 0.0;
-      out.worst = std::max(out.worst, std::abs(p.deviation - move));
+          out.worst = std::max(out.worst, std::abs(p.deviation - move));
       out.worst_in_u = std::max(out.worst_in_u, std::abs(p.deviation - move) / p.uncertainty);
       ++rows;
     }
@@ -241,12 +243,15 @@ TEST(NistCharacteristics, FtcSixsProfilesAreJudgedInTheirDatumFramesAsTheirMoves
 }
 
 // STC-08's profiles are 0.13–1.52 mm wide on most of its faces: moved by up to three quarters of that, most points
-// would lie 0.4–1.1 mm off, and the registration (the best fit of all points) refuses the run as doubtful (robust
-// scale 0.354 mm, more than r/4), rightly: that fit is then no location of the part. Its faces are moved by at most
-// 0.4 mm (the others stay, and must read 0). Profile 25's frame D|J|H is not set up, and says why: J is a pattern of
-// two holes (four half-cylinder faces, 92.7 mm apart), which with D fixes every motion, so H has none left to fix.
+// lie 0.4–1.1 mm off, and the best fit of all the points is refused as doubtful (robust scale 0.354 mm, more than
+// r/4), rightly: that fit is no location of the part. Its datum features' 517 points locate it instead, as its
+// drawing does (compensation::RegisterOptions::datum_faces). Over seeds 1–8: 13 of 14 evaluated every time, each
+// decision the truth's, the aligned rows' largest |deviation − move| 6.2–7.8 µm (median 6.8). Profile 25's frame
+// D|J|H is not set up, and says why: J is a pattern of two holes (four half-cylinder faces, 92.7 mm apart), which
+// with D fixes every motion, so H has none left to fix.
 TEST(NistCharacteristics, StcEightsProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay) {
-  const Judged j = judge_as_moved(test::kCadDir / "nist_stc_08_asme1_ap242-e3.stp", 7, 0.4);
+  const Judged j = judge_as_moved(test::kCadDir / "nist_stc_08_asme1_ap242-e3.stp", 7);
+  EXPECT_TRUE(j.by_datums);
   EXPECT_EQ(j.evaluated, 13);
   EXPECT_LT(j.worst, 0.010);
 }

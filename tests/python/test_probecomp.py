@@ -139,6 +139,16 @@ def test_the_demo_gives_the_clis_numbers(demo, work):
     with pytest.raises(probecomp.InputError, match="spec_bad.json"):
         (work / "spec_bad.json").write_text("{")
         res.judge(model, work / "spec_bad.json")
+    # Given to compensate() too, the specification's datum features would locate a part whose best fit is doubtful;
+    # this one's is credible, so all the points locate it and the numbers are the same. A bad one fails before the run.
+    located = probecomp.compensate(model, raw.points, probe_radius=1.0, normals=raw.normals, characteristics=spec)
+    assert located.stats["registration"]["located_by"] == "all-points"
+    assert located.stats["registration"]["locating_points"] == 7200
+    assert located.stats["registration"] == json.load(open(judged_cli))["registration"]
+    assert np.array_equal(located.deviation, res.deviation)
+    with pytest.raises(probecomp.InputError, match="spec_bad.json"):
+        probecomp.compensate(model, raw.points, probe_radius=1.0, normals=raw.normals,
+                             characteristics=work / "spec_bad.json")
 
 
 def test_a_held_out_free_form_case_gives_the_clis_numbers_and_meets_the_truth(heldout, demo, work, capsys):

@@ -153,6 +153,11 @@ struct RegisterOptions {
   // RegistrationError unless this is set: the checks cannot tell a wrong pose from a part that deviates from its
   // model by about r, and only the user knows which it is. Accepted, it comes back with a warning in its notes.
   bool accept_doubtful = false;
+  // The faces of the specification's datum features (as `probecomp info` lists them). A registration that stays
+  // doubtful on all the points is tried on theirs alone (registration::register_by_faces), as a drawing locates its
+  // part: the other faces may then be as far off as the part deviates. Kept when credible on those points and they
+  // fix all six motions; the result's notes say so. Empty: no such fallback.
+  std::vector<int> datum_faces{};
 };
 
 // The raw centres registered to the prepared offset model. Throws InputError when the points are nowhere near
@@ -322,6 +327,7 @@ struct CompensateOptions {
   registration::RegistrationOptions registration;
   double max_initial_distance_fraction = 0.1;  // as RegisterOptions
   bool accept_doubtful_registration = false;   // as RegisterOptions::accept_doubtful
+  std::vector<int> datum_faces{};              // as RegisterOptions::datum_faces
   fitting::OffsetOptions offset;
   FitOptions fit;
   // Called at the start of each step with the fraction of the run done (0–1); may be empty.

@@ -48,6 +48,10 @@ struct Specification {
 // perpendicularities, ...) are not characteristics of this step and are counted in `skipped`.
 [[nodiscard]] Specification from_pmi(const cad::Pmi& pmi, int& skipped);
 
+// The faces of every datum feature the specification defines (sorted, once each): what locates the part when the
+// best fit of all its points is doubtful (compensation::CompensateOptions::datum_faces).
+[[nodiscard]] std::vector<int> datum_faces(const Specification& spec);
+
 enum class Decision { Conforms, DoesNotConform, Indeterminate, NotEvaluated };
 
 // A trusted point as its characteristic judged it (the report's view colours by these).

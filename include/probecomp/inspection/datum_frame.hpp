@@ -80,7 +80,7 @@ struct DatumFrame {
                                          const compensation::CompensationResult& result);
 
 // `result` put in `frame`: its transform the frame's, and each computed point's deviation its signed distance (+ outside
-// the material) from the nominal model so placed (the nearest face's, inside its trim), its u with the frame's own
+// the material) from its own face of the nominal model so placed (the face it was compensated on), its u with the frame's own
 // share added (DatumFrame::covariance), and the statistics of them.
 // The output's `alignment`.
 [[nodiscard]] compensation::CompensationResult aligned(const compensation::CompensationResult& result,

@@ -8,6 +8,7 @@
 //                 where point-to-point slides slowly along flat or gently curved surfaces.
 // Motions the data cannot fix (see constraints.hpp) are held at the starting transform.
 
+#include <cstdint>
 #include <limits>
 #include <span>
 #include <string>
@@ -40,6 +41,10 @@ struct RegistrationOptions {
   geometry::RigidTransform initial = geometry::RigidTransform::Identity();  // CAD to machine: where the part is thought to be
   // Correspondences farther than this (mm) are not used; the default uses all (the robust weights cope).
   double max_distance = std::numeric_limits<double>::infinity();
+  // When given (one per point): only the points marked nonzero enter the estimate, the part located by them alone
+  // (its datum features' points: registration/routes.hpp). The others get their correspondences at the final
+  // transform and no weight. Must outlive the call.
+  std::span<const std::uint8_t> located_by{};
 };
 
 enum class Status {
@@ -83,6 +88,9 @@ struct RegistrationResult {
   Constraints constraints;     // the motions the data fix; the free ones were held at the start
   std::vector<PointMatch> matches;  // one per input point, in input order
   std::vector<std::string> notes;   // what a caller should pass on to the user (e.g. how a coarse alignment went)
+  // Empty: every usable point located the part. Else one per point, nonzero for those that did (its datum features'
+  // points; RegistrationOptions::located_by): the credibility checks and a second registration keep to them.
+  std::vector<std::uint8_t> located_by;
 
   [[nodiscard]] bool converged() const { return status == Status::Converged; }
 };
@@ -100,6 +108,12 @@ inline constexpr std::size_t kMinCoarseStagePoints = 1024;
 // target.
 [[nodiscard]] RegistrationResult register_points(const cad::ModelLocator& model, std::span<const Point3> machine_points,
                                                  const RegistrationOptions& options = {},
+                                                 std::span<const double> offsets = {});
+
+// Each point's correspondence on the model at `transform` (CAD to machine), as register_points reports them, the
+// model not moved. `offsets` as for register_points.
+[[nodiscard]] std::vector<PointMatch> matches_at(const cad::ModelLocator& model, std::span<const Point3> machine_points,
+                                                 const geometry::RigidTransform& transform,
                                                  std::span<const double> offsets = {});
 
 }  // namespace probecomp::registration

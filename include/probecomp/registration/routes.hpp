@@ -29,4 +29,14 @@ namespace probecomp::registration {
                                                           const RegistrationOptions& options = {},
                                                           std::span<const double> beyond = {});
 
+// A part located by some of its faces alone (its datum features, `faces` positions in offset.model.faces): the raw
+// centres whose correspondence lies inside one of those faces register the part, from options.initial, and are
+// chosen again where that puts the part until the choice settles (at most kFeatureRounds registrations). Every
+// centre gets its correspondence at the final transform; the result's located_by marks those that located it.
+inline constexpr int kFeatureRounds = 4;
+[[nodiscard]] RegistrationResult register_by_faces(const cad::OffsetModel& offset, const cad::ModelLocator& locator,
+                                                   std::span<const Point3> raw_centres, std::span<const int> faces,
+                                                   const RegistrationOptions& options = {},
+                                                   std::span<const double> beyond = {});
+
 }  // namespace probecomp::registration
