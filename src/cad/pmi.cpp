@@ -54,9 +54,12 @@ namespace {
 
 using detail::fail;
 
-// A point datum target lies on a face of the file's own geometry, to the precision of its coordinates (STEP files
+// A point or line datum target's placement lies on a face of the file's own geometry, to the precision of its coordinates (STEP files
 // write 10–15 digits) and the closest-point solver's (1e-9 mm): 1 µm takes the face it is on and no other.
 constexpr double kTargetOnFace = 1e-3;
+// A line datum target runs along its face: the cosine of its direction with the face's normal where it is placed is
+// at most this (its directions written to 10–15 digits; FTC-06's are exact, 0).
+constexpr double kTargetAlongFace = 1e-6;
 
 ToleranceType type_of(XCAFDimTolObjects_GeomToleranceType t) {
   switch (t) {
@@ -241,8 +244,8 @@ Pmi read_pmi(const std::filesystem::path& path, const Model& model) {
     // once for every tolerance that refers to it: NIST CTC-02).
     std::map<std::string, DatumFeature> features;
     struct PlacedTargets {
-      std::map<int, Point3> points;  // by number
-      std::set<int> unplaced;        // lines, and points without a place
+      std::map<int, DatumTarget> placed;  // by number, not yet on a face
+      std::set<int> unplaced;             // targets without a place
     };
     std::map<std::string, PlacedTargets> targets;
     TDF_LabelSequence datum_labels;
@@ -261,9 +264,17 @@ Pmi read_pmi(const std::filesystem::path& path, const Model& model) {
       if (target && !area) {
         PlacedTargets& t = targets[name];
         const int number = object->GetDatumTargetNumber();
-        if (object->HasDatumTargetParams() && object->GetDatumTargetType() == XCAFDimTolObjects_DatumTargetType_Point) {
-          const gp_Pnt at = object->GetDatumTargetAxis().Location();
-          t.points.emplace(number, Point3(at.X(), at.Y(), at.Z()));
+        const XCAFDimTolObjects_DatumTargetType type = object->GetDatumTargetType();
+        if (object->HasDatumTargetParams() &&
+            (type == XCAFDimTolObjects_DatumTargetType_Point || type == XCAFDimTolObjects_DatumTargetType_Line)) {
+          const gp_Ax2 axis = object->GetDatumTargetAxis();
+          DatumTarget placed{.number = number, .point = Point3(axis.Location().X(), axis.Location().Y(), axis.Location().Z())};
+          if (type == XCAFDimTolObjects_DatumTargetType_Line) {
+            // Along the placement's axis: FTC-06's lines run so across their faces; its x direction leaves them.
+            placed.direction = Vector3(axis.Direction().X(), axis.Direction().Y(), axis.Direction().Z());
+            placed.length = object->GetDatumTargetLength();
+          }
+          t.placed.emplace(number, placed);
         } else {
           t.unplaced.insert(number);
         }
@@ -285,20 +296,23 @@ Pmi read_pmi(const std::filesystem::path& path, const Model& model) {
     }
     // Point targets on the faces they lie on; a target off every face is not used (and counted).
     std::optional<ModelLocator> locator;
-    for (auto& [name, placed] : targets) {
+    for (auto& [name, found] : targets) {
       DatumFeature& feature = features[name];
-      for (const auto& [number, point] : placed.points) {
+      for (auto& [number, target] : found.placed) {
         if (!locator) locator.emplace(model);
-        const ModelPoint foot = locator->closest_point(point);
-        if (foot.ok() && std::abs(foot.distance) <= kTargetOnFace) {
-          feature.targets.push_back({.number = number, .point = point, .face = foot.face});
+        const ModelPoint foot = locator->closest_point(target.point);
+        // A line must run along its face: across the normal there.
+        const bool along = !target.line() || std::abs(target.direction.dot(foot.normal)) <= kTargetAlongFace;
+        if (foot.ok() && std::abs(foot.distance) <= kTargetOnFace && along && target.length >= 0.0) {
+          target.face = foot.face;
+          feature.targets.push_back(target);
           feature.faces.push_back(foot.face);
         } else {
-          placed.unplaced.insert(number);
+          found.unplaced.insert(number);
         }
       }
       // The entity graph counts every point or line target; those placed here are taken.
-      feature.point_or_line_targets = std::max(static_cast<int>(placed.unplaced.size()),
+      feature.point_or_line_targets = std::max(static_cast<int>(found.unplaced.size()),
                                                feature.point_or_line_targets - static_cast<int>(feature.targets.size()));
     }
     for (auto& [name, feature] : features) {

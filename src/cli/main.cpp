@@ -133,15 +133,21 @@ int run_info(const std::string& part, bool json) {
     }
     io::Json features = io::Json::array();
     for (const cad::DatumFeature& d : pmi.datum_features) {
-      io::Json targets = io::Json::array();
-      for (const cad::DatumTargetPoint& t : d.targets) {
-        targets.push_back({{"number", t.number},
-                           {"point", {io::json_number(t.point.x(), 9), io::json_number(t.point.y(), 9),
-                                      io::json_number(t.point.z(), 9)}},
-                           {"face", t.face}});
+      io::Json points = io::Json::array(), lines = io::Json::array();
+      const auto triple = [](const Vector3& v) {
+        return io::Json::array({io::json_number(v.x(), 9), io::json_number(v.y(), 9), io::json_number(v.z(), 9)});
+      };
+      for (const cad::DatumTarget& t : d.targets) {
+        if (t.line()) {
+          lines.push_back({{"number", t.number}, {"point", triple(t.point)}, {"direction", triple(t.direction)},
+                           {"length", io::json_number(t.length, 9)}, {"face", t.face}});
+        } else {
+          points.push_back({{"number", t.number}, {"point", triple(t.point)}, {"face", t.face}});
+        }
       }
       features.push_back({{"name", d.name}, {"faces", d.faces}, {"area_targets", d.area_targets},
-                          {"point_targets", targets}, {"point_or_line_targets", d.point_or_line_targets}});
+                          {"point_targets", points}, {"line_targets", lines},
+                          {"point_or_line_targets", d.point_or_line_targets}});
     }
     info_out["pmi"] = {{"datums", pmi.datums}, {"datum_features", features}, {"tolerances", tolerances},
                        {"warnings", pmi.warnings}};

@@ -91,13 +91,35 @@ Specification read_specification(const std::filesystem::path& path, const cad::M
           bad(path, where + ": unknown fit \"" + fit + "\" (expected least-squares or tangent)");
         }
         if (d.contains("targets")) {
-          // Point targets, [x, y, z] in the model's mm: NAME1, NAME2, ... in their order.
-          if (!d["targets"].is_array() || d["targets"].empty()) bad(path, where + ": \"targets\" must be a list of [x, y, z]");
+          // Point targets, [x, y, z] in the model's mm, and line targets, {"point", "direction", "length"}: NAME1,
+          // NAME2, ... in their order.
+          if (!d["targets"].is_array() || d["targets"].empty()) {
+            bad(path, where + ": \"targets\" must be a list of points [x, y, z] or lines {\"point\", \"direction\", \"length\"}");
+          }
+          const auto triple = [&](const nlohmann::json& v, const char* what) {
+            if (!v.is_array() || v.size() != 3) bad(path, where + ": a target's " + what + " must be [x, y, z]");
+            const Vector3 x(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+            if (!x.allFinite()) bad(path, where + ": a target's " + what + " must be finite");
+            return x;
+          };
           for (const nlohmann::json& t : d["targets"]) {
-            if (!t.is_array() || t.size() != 3) bad(path, where + ": a target must be [x, y, z] (mm)");
-            const Point3 at(t[0].get<double>(), t[1].get<double>(), t[2].get<double>());
-            if (!at.allFinite()) bad(path, where + ": a target's coordinates must be finite");
-            datum.targets.push_back({name + std::to_string(datum.targets.size() + 1), at});
+            Target target{.label = name + std::to_string(datum.targets.size() + 1)};
+            if (t.is_object()) {
+              if (!t.contains("point") || !t.contains("direction") || !t.contains("length")) {
+                bad(path, where + ": a line target needs \"point\", \"direction\" and \"length\" (mm)");
+              }
+              target.point = triple(t["point"], "point");
+              target.direction = triple(t["direction"], "direction");
+              target.length = t["length"].get<double>();
+              if (!(target.direction.norm() > 0.0)) bad(path, where + ": a line target's direction must not be zero");
+              if (!(target.length > 0.0) || !std::isfinite(target.length)) {
+                bad(path, where + ": a line target's length must be positive (mm)");
+              }
+              target.direction.normalize();
+            } else {
+              target.point = triple(t, "point");
+            }
+            datum.targets.push_back(std::move(target));
           }
         }
         spec.datums.push_back(std::move(datum));
@@ -163,13 +185,14 @@ Specification from_pmi(const cad::Pmi& pmi, int& skipped) {
   for (const cad::DatumFeature& d : pmi.datum_features) {
     if (d.point_or_line_targets > 0) {
       spec.unusable_datums[d.name] = "datum " + d.name + " is set by " + std::to_string(d.point_or_line_targets) +
-                                     " line datum targets or points the file does not place on a face, which are not "
-                                     "read yet";
+                                     " datum targets (points or lines) the file does not place on a face";
     } else if (d.faces.empty()) {
       spec.unusable_datums[d.name] = "datum " + d.name + ": its datum feature could not be read from the file";
     } else {
       DatumSpec datum{.name = d.name, .faces = d.faces};
-      for (const cad::DatumTargetPoint& t : d.targets) datum.targets.push_back({d.name + std::to_string(t.number), t.point});
+      for (const cad::DatumTarget& t : d.targets) {
+        datum.targets.push_back({d.name + std::to_string(t.number), t.point, t.direction, t.length});
+      }
       spec.datums.push_back(std::move(datum));
     }
   }

@@ -73,6 +73,12 @@ double radius_sign(const cad::ElementarySurface& s, const cad::ModelPoint& foot)
 
 }  // namespace
 
+double Target::distance(const Point3& x) const {
+  if (direction == Vector3::Zero()) return (x - point).norm();
+  const double along = std::clamp(direction.dot(x - point), -length, length);
+  return (x - (point + along * direction)).norm();
+}
+
 cad::Model faces_of(const cad::Model& nominal, const std::vector<int>& faces) {
   cad::Model own;
   own.file_units = nominal.file_units;
@@ -180,14 +186,14 @@ DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Mode
   std::string untouched;  // the first target no trusted point touches
   for (std::size_t s = 0; s < datums.size(); ++s) {
     const std::set<int> faces(datums[s].faces.begin(), datums[s].faces.end());
-    const std::vector<TargetPoint>& targets = datums[s].targets;
+    const std::vector<Target>& targets = datums[s].targets;
     std::vector<int> touches(targets.size(), 0);
     for (const compensation::CompensatedPoint& p : result.points) {
       if (p.status != compensation::PointStatus::Ok || !faces.contains(p.face)) continue;
       const Point3 x = to_cad * p.contact;
       bool at_target = targets.empty();
       for (std::size_t t = 0; t < targets.size(); ++t) {
-        if ((x - targets[t].point).norm() <= kTargetReach) {
+        if (targets[t].distance(x) <= kTargetReach) {
           ++touches[t];
           at_target = true;
         }
@@ -202,9 +208,16 @@ DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Mode
     }
     for (std::size_t t = 0; t < targets.size() && untouched.empty(); ++t) {
       if (touches[t] > 0) continue;
-      char where[128];
-      std::snprintf(where, sizeof where, " mm of its target %s (%.3f, %.3f, %.3f)", targets[t].label.c_str(),
-                    targets[t].point.x(), targets[t].point.y(), targets[t].point.z());
+      const Target& target = targets[t];
+      char where[192];
+      if (target.direction == Vector3::Zero()) {
+        std::snprintf(where, sizeof where, " mm of its target %s (%.3f, %.3f, %.3f)", target.label.c_str(),
+                      target.point.x(), target.point.y(), target.point.z());
+      } else {
+        std::snprintf(where, sizeof where, " mm of its line target %s (%.3f mm either side of (%.3f, %.3f, %.3f) along (%.4f, %.4f, %.4f))",
+                      target.label.c_str(), target.length, target.point.x(), target.point.y(), target.point.z(),
+                      target.direction.x(), target.direction.y(), target.direction.z());
+      }
       char reach[32];
       std::snprintf(reach, sizeof reach, "%g", kTargetReach);
       untouched = "datum " + datums[s].name + ": no trusted point within " + reach + where;

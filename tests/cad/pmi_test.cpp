@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -14,6 +15,7 @@
 #include <set>
 #include <string>
 
+#include "probecomp/cad/locator.hpp"
 #include "support/data_files.hpp"
 #include "support/light.hpp"
 
@@ -68,6 +70,31 @@ TEST(Pmi, FtcSixHasItsTolerancesWithMagnitudesOnTheRightFaces) {
     }
   }
   for (const char* d : {"A", "B", "C", "D"}) EXPECT_NE(std::find(pmi.datums.begin(), pmi.datums.end(), d), pmi.datums.end()) << d;
+  // Datums J and K are each two line targets, J1 and J2 on the two flanks of a V (planes whose normals are
+  // (±0.906, 0.423, 0)), running up them along z: 1.25 in long, placed 0.65 in below the top, x = ±2.697 and ±3.803
+  // in (the file's figures). Each line lies in its face.
+  const ModelLocator on_face(model);
+  for (const DatumFeature& d : pmi.datum_features) {
+    if (d.name != "J" && d.name != "K") continue;
+    SCOPED_TRACE(d.name);
+    EXPECT_EQ(d.point_or_line_targets, 0);
+    ASSERT_EQ(d.targets.size(), 2u);
+    ASSERT_EQ(d.faces.size(), 2u);
+    for (const DatumTarget& t : d.targets) {
+      ASSERT_TRUE(t.line());
+      EXPECT_NEAR(t.length, 31.75, 1e-9);
+      EXPECT_NEAR(std::abs(t.direction.z()), 1.0, 1e-12);
+      EXPECT_NEAR(t.point.z(), -16.51, 1e-9);
+      EXPECT_NEAR(std::abs(t.point.x()), t.number == 1 ? 68.5038 : 96.5962, 1e-4);
+      const Face& face = model.faces[static_cast<std::size_t>(t.face)];
+      EXPECT_EQ(face.source_type, "plane");
+      for (const double along : {-0.25, 0.25}) {
+        const ModelPoint foot = on_face.closest_point(t.point + along * t.length * t.direction);
+        EXPECT_EQ(foot.face, t.face);
+        EXPECT_NEAR(foot.distance, 0.0, 1e-9);
+      }
+    }
+  }
 }
 
 TEST(Pmi, EveryNistPartReadsItsTolerances) {

@@ -120,7 +120,7 @@ TEST(Characteristics, WithADatumWithoutFacesOrTooFewPointsTheyAreNotEvaluatedWit
   const Measured m = measure(0.02);
   Specification s = flatness(0.05);
   s.characteristics[0].datums = {"A"};
-  s.unusable_datums["A"] = "datum A is set by 3 point or line datum targets, which are not read yet";
+  s.unusable_datums["A"] = "datum A is set by 3 datum targets (points or lines) the file does not place on a face";
   const CharacteristicResult with_datums = evaluate(s, m.nominal, m.result).characteristics.at(0);
   EXPECT_EQ(with_datums.decision, Decision::NotEvaluated);
   EXPECT_EQ(with_datums.reason, s.unusable_datums["A"]);
@@ -157,18 +157,28 @@ TEST(Characteristics, ABadSpecificationIsRefusedNamingTheFileAndTheCause) {
   refused(R"({"datums": {"A": {"faces": [0], "fit": "minimum-zone"}}, "characteristics": []})", "unknown fit \"minimum-zone\"");
   refused(R"({"datums": {"A": {"faces": [0]}}, "alignment": ["Z"], "characteristics": []})", "alignment: datum Z is not defined");
   refused(R"({"datums": {"A": {"faces": [0]}}, "alignment": [], "characteristics": []})", "alignment: no datums");
-  refused(R"({"datums": {"A": {"faces": [0], "targets": [[1, 2]]}}, "characteristics": []})", "datum A: a target must be [x, y, z]");
+  refused(R"({"datums": {"A": {"faces": [0], "targets": [[1, 2]]}}, "characteristics": []})", "datum A: a target's point must be [x, y, z]");
+  refused(R"({"datums": {"A": {"faces": [0], "targets": [{"point": [1, 2, 0], "direction": [0, 1, 0]}]}}, "characteristics": []})",
+          "datum A: a line target needs \"point\", \"direction\" and \"length\"");
+  refused(R"({"datums": {"A": {"faces": [0], "targets": [{"point": [1, 2, 0], "direction": [0, 0, 0], "length": 5}]}}, "characteristics": []})",
+          "datum A: a line target's direction must not be zero");
+  refused(R"({"datums": {"A": {"faces": [0], "targets": [{"point": [1, 2, 0], "direction": [0, 1, 0], "length": 0}]}}, "characteristics": []})",
+          "datum A: a line target's length must be positive");
   refused(R"({"datums": {"A": {"faces": [0], "targets": []}}, "characteristics": []})", "datum A: \"targets\" must be a list");
-  std::ofstream(path) << R"({"datums": {"A": {"faces": [0], "fit": "tangent", "targets": [[1, 2, 0], [3, 4, 0.5]]}}, "alignment": ["A"], "characteristics": [{"name": "P", "faces": [0], "tolerance": 0.1, "outside": 0.02, "datums": ["A"]}]})";
+  std::ofstream(path) << R"({"datums": {"A": {"faces": [0], "fit": "tangent", "targets": [[1, 2, 0], [3, 4, 0.5], {"point": [1, 1, 0], "direction": [0, 2, 0], "length": 3}]}}, "alignment": ["A"], "characteristics": [{"name": "P", "faces": [0], "tolerance": 0.1, "outside": 0.02, "datums": ["A"]}]})";
   const Specification s = read_specification(path, model);
   ASSERT_EQ(s.characteristics.size(), 1u);
   EXPECT_EQ(s.characteristics[0].name, "P");
   EXPECT_DOUBLE_EQ(*s.characteristics[0].outside, 0.02);
   ASSERT_EQ(s.datums.size(), 1u);
   EXPECT_EQ(s.datums[0].name, "A");
-  ASSERT_EQ(s.datums[0].targets.size(), 2u);
+  ASSERT_EQ(s.datums[0].targets.size(), 3u);
   EXPECT_EQ(s.datums[0].targets[1].label, "A2");
   EXPECT_EQ(s.datums[0].targets[1].point, Point3(3, 4, 0.5));
+  EXPECT_EQ(s.datums[0].targets[1].direction, Vector3::Zero());
+  EXPECT_EQ(s.datums[0].targets[2].label, "A3");
+  EXPECT_EQ(s.datums[0].targets[2].direction, Vector3(0, 1, 0));  // made unit
+  EXPECT_EQ(s.datums[0].targets[2].length, 3.0);
   EXPECT_EQ(s.datums[0].faces, std::vector<int>{0});
   EXPECT_EQ(s.datums[0].fit, DatumFit::Tangent);
   EXPECT_EQ(s.alignment, std::vector<std::string>{"A"});

@@ -330,10 +330,10 @@ TEST(DatumFrame, ThreeTwoOnePointsFixEveryMotion) {
 // whole bottom would put it about 0.05 mm in). A target no trusted point touches keeps the frame from being set up.
 TEST(DatumFrame, PointTargetsTakeOnlyTheTouchesAtThem) {
   const Block& b = block();
-  const std::vector<TargetPoint> targets{{"A1", Point3(5, 5, 0)}, {"A2", Point3(55, 5, 0)}, {"A3", Point3(20, 35, 0)}};
+  const std::vector<Target> targets{{"A1", Point3(5, 5, 0)}, {"A2", Point3(55, 5, 0)}, {"A3", Point3(20, 35, 0)}};
   Part part;
   part.bottom = [&](const Point3& p) {
-    for (const TargetPoint& t : targets) {
+    for (const Target& t : targets) {
       if ((p - t.point).norm() < 1e-9) return Point3(p + Vector3(0, 0, 0.01));
     }
     return Point3(p + Vector3(0, 0, 0.05));
@@ -357,6 +357,41 @@ TEST(DatumFrame, PointTargetsTakeOnlyTheTouchesAtThem) {
   const CharacteristicResult off = evaluate(spec, b.model, r).characteristics.at(0);
   EXPECT_EQ(off.decision, Decision::NotEvaluated);
   EXPECT_NE(off.reason.find("datum A: no trusted point within 1 mm of its target A3 (22.500, 35.000, 0.000)"),
+            std::string::npos) << off.reason;
+}
+
+// Datum A by two line targets across the bottom (A1 at x = 5, A2 at x = 55, along y over its 40 mm), the bottom 0.01
+// mm up along them and 0.05 mm up elsewhere: A is the plane on the touches along the lines alone (two lines fix its
+// height and both tilts), so in A|B|C the top lies 0.01 mm in. A line no trusted point touches is named.
+TEST(DatumFrame, LineTargetsTakeOnlyTheTouchesAlongThem) {
+  const Block& b = block();
+  const std::vector<Target> targets{{"A1", Point3(5, 20, 0), Vector3::UnitY(), 20.0},
+                                    {"A2", Point3(55, 20, 0), Vector3::UnitY(), 20.0}};
+  Part part;
+  part.bottom = [&](const Point3& p) {
+    const bool on_line = std::abs(p.x() - 5) < 1e-9 || std::abs(p.x() - 55) < 1e-9;
+    return Point3(p + Vector3(0, 0, on_line ? 0.01 : 0.05));
+  };
+  const compensation::CompensationResult r = measure(part);
+  Specification spec;
+  spec.datums = {{.name = "A", .faces = {b.bottom}, .fit = DatumFit::LeastSquares, .targets = targets},
+                 {"B", {b.front}}, {"C", {b.left}}};
+  spec.characteristics = {{.name = "P", .faces = {b.top}, .tolerance = 0.1, .outside = {}, .datums = {"A", "B", "C"}}};
+  const Inspection judged = evaluate(spec, b.model, r);
+  const CharacteristicResult& top = judged.characteristics.at(0);
+  ASSERT_NE(top.decision, Decision::NotEvaluated) << top.reason;
+  EXPECT_NEAR(top.min, -0.01, 1e-7);
+  EXPECT_NEAR(top.max, -0.01, 1e-7);
+  const DatumFrame& frame = judged.frames.at("A|B|C");
+  EXPECT_EQ(frame.datums.at(0).points, 14);  // the grid's 7 touches along each line
+  EXPECT_EQ(frame.datums.at(0).fixes, 3);
+
+  // A2 moved to x = 22.5, 2.5 mm from the nearest touches.
+  spec.datums[0].targets[1].point = Point3(22.5, 20, 0);
+  const CharacteristicResult off = evaluate(spec, b.model, r).characteristics.at(0);
+  EXPECT_EQ(off.decision, Decision::NotEvaluated);
+  EXPECT_NE(off.reason.find("datum A: no trusted point within 1 mm of its line target A2 (20.000 mm either side of "
+                            "(22.500, 20.000, 0.000) along (0.0000, 1.0000, 0.0000))"),
             std::string::npos) << off.reason;
 }
 

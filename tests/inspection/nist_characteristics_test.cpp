@@ -63,12 +63,17 @@ Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7)
   measured = datum_faces;
   for (const CharacteristicSpec& c : spec.characteristics) measured.insert(c.faces.begin(), c.faces.end());
   std::vector<simulation::ProgrammedPoint> plan = sparse_plan(nominal, measured);
-  // A datum set by point targets is touched at them, as a part program does.
+  // A datum set by targets is touched at them, as a part program does: a point target there, a line target there and
+  // a quarter of its length either way where that stays on its face.
   const cad::ModelLocator on_nominal(nominal);
   for (const DatumSpec& d : spec.datums) {
-    for (const TargetPoint& t : d.targets) {
-      const cad::ModelPoint foot = on_nominal.closest_point(t.point);
-      plan.push_back({t.point, foot.normal, foot.face});
+    for (const Target& t : d.targets) {
+      const int face = on_nominal.closest_point(t.point).face;
+      for (const double along : t.direction == Vector3::Zero() ? std::vector<double>{0.0} : std::vector<double>{-0.25, 0.0, 0.25}) {
+        const Point3 at = t.point + along * t.length * t.direction;
+        const cad::ModelPoint foot = on_nominal.closest_point(at);
+        if (foot.face == face && std::abs(foot.distance) < 1e-6) plan.push_back({at, foot.normal, foot.face});
+      }
     }
   }
   // Which frames fix all six motions: set up on the plan's own (nominal) points.

@@ -28,11 +28,17 @@ struct GeometricTolerance {
   std::vector<std::string> datums;  // the datum reference frame, primary first (each name once)
 };
 
-// A point datum target (A1, A2, ...) as the file places it: where the datum simulator touches the part.
-struct DatumTargetPoint {
-  int number = 0;             // A1: 1
-  Point3 point = Point3::Zero();  // the model's coordinates, mm
-  int face = -1;              // the face it lies on (position in the model's faces)
+// A point or line datum target (A1, A2, ...) as the file places it: where the datum simulator touches the part.
+// A line's place is a point on it and its direction (the target's placement axis), with its length. Whether that
+// point is the line's start or its middle AP242's practice does not settle: NIST FTC-06's J1 lies across its 31.75 mm
+// face from a point 0.635 mm below the face's middle, its length the face's height.
+struct DatumTarget {
+  int number = 0;                         // A1: 1
+  Point3 point = Point3::Zero();          // the model's coordinates, mm
+  Vector3 direction = Vector3::Zero();    // a line's (unit); zero for a point
+  double length = 0.0;                    // a line's, mm
+  int face = -1;                          // the face it lies on (position in the model's faces)
+  [[nodiscard]] bool line() const { return direction != Vector3::Zero(); }
 };
 
 // A datum as the file defines it: the faces of its datum feature, or datum targets.
@@ -41,9 +47,9 @@ struct DatumFeature {
   // The datum feature's faces (positions in the model's faces), sorted; with point targets, the faces they lie on.
   std::vector<int> faces;
   // Datum targets: points, lines or areas on the part rather than a whole feature. Areas tie to faces like a
-  // feature; points are placed (`targets`, in number order) where the file places them on a face; lines, and points
-  // it does not place on one, are counted in `point_or_line_targets` and not used.
-  std::vector<DatumTargetPoint> targets;
+  // feature; points and lines are placed (`targets`, in number order) where the file places them on a face; those
+  // it does not place on one are counted in `point_or_line_targets` and not used.
+  std::vector<DatumTarget> targets;
   int point_or_line_targets = 0;
   int area_targets = 0;
 };

@@ -24,14 +24,19 @@ namespace probecomp::inspection {
 enum class DatumFit { LeastSquares, Tangent };
 [[nodiscard]] const char* to_string(DatumFit f);  // "least-squares", "tangent"
 
-// A point datum target (A1): the datum simulator touches the part there.
-struct TargetPoint {
-  std::string label;               // "A1"
-  Point3 point = Point3::Zero();   // on the nominal, mm
+// A point or line datum target (A1): the datum simulator touches the part there. A line is the segment of its
+// length either side of `point` along `direction` (cad::DatumTarget: the file's place may be its start or middle).
+struct Target {
+  std::string label;                    // "A1"
+  Point3 point = Point3::Zero();        // on the nominal, mm
+  Vector3 direction = Vector3::Zero();  // a line's (unit); zero for a point
+  double length = 0.0;                  // a line's, mm
+  // How far `x` (CAD frame) is from it, mm.
+  [[nodiscard]] double distance(const Point3& x) const;
 };
 
-// A trusted point within this distance of a point target (in the CAD frame, the part placed by the registration) is
-// a touch of it: a touch programmed at the target lands within the registration's misfit of it (micrometres), and a
+// A trusted point within this distance of a target (in the CAD frame, the part placed by the registration) is a
+// touch of it: a touch programmed at the target lands within the registration's misfit of it (micrometres), and a
 // face's other points, 10–40 of them, lie millimetres apart.
 inline constexpr double kTargetReach = 1.0;
 
@@ -39,9 +44,9 @@ struct DatumSpec {
   std::string name;
   std::vector<int> faces;  // model face indices, as `probecomp info` lists them
   DatumFit fit = DatumFit::LeastSquares;
-  // Point targets: the datum is fitted to the trusted points on `faces` within kTargetReach of one of them, and is
+  // Datum targets: the datum is fitted to the trusted points on `faces` within kTargetReach of one of them, and is
   // not set up while a target has none.
-  std::vector<TargetPoint> targets{};
+  std::vector<Target> targets{};
 };
 
 struct DatumResult {
