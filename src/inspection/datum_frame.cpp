@@ -63,6 +63,37 @@ std::optional<cad::ElementaryKind> size_kind(const cad::Model& model, const std:
   return kind;
 }
 
+// The direction the datum's faces share (DatumResult::axis), if they are planes, cylinders or cones that share one.
+// Within 1e-9: the same direction as written in the file, to its 10–15 digits.
+std::optional<Vector3> shared_axis(const cad::Model& model, const std::vector<int>& faces) {
+  std::optional<Vector3> axis;
+  std::optional<cad::ElementaryKind> kind;
+  for (int f : faces) {
+    const cad::Face& face = model.faces[static_cast<std::size_t>(f)];
+    if (!face.analytic) return std::nullopt;
+    const cad::ElementarySurface& s = face.analytic->surface();
+    if (s.kind != cad::ElementaryKind::Plane && s.kind != cad::ElementaryKind::Cylinder && s.kind != cad::ElementaryKind::Cone) {
+      return std::nullopt;
+    }
+    Vector3 a = s.z.normalized();
+    if (s.kind == cad::ElementaryKind::Plane) {
+      // Outward: the face's `outward` is of its NURBS's S_u × S_v (whose parameters may run against the plane's).
+      const nurbs::Domain dom = face.surface.domain();
+      const nurbs::SurfaceD1 d = nurbs::derivatives_d1(face.surface, 0.5 * (dom.u0 + dom.u1), 0.5 * (dom.v0 + dom.v1));
+      a = d.Su.cross(d.Sv).normalized() * static_cast<double>(face.outward);
+      if (!a.allFinite()) return std::nullopt;
+    }
+    if (kind && *kind != s.kind) return std::nullopt;
+    kind = s.kind;
+    if (!axis) {
+      axis = a;
+    } else if (s.kind == cad::ElementaryKind::Plane ? (a - *axis).norm() > 1e-9 : a.cross(*axis).norm() > 1e-9) {
+      return std::nullopt;
+    }
+  }
+  return axis;
+}
+
 // +1 where the outward normal points away from the cylinder's axis (a pin) or the sphere's centre (a ball), −1 for a
 // hole or a socket: the sign that turns the mean outward distance into a change of radius.
 double radius_sign(const cad::ElementarySurface& s, const cad::ModelPoint& foot) {
@@ -306,6 +337,7 @@ DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Mode
       const cad::ModelPoint& foot = fit.feet[static_cast<std::size_t>(fit.used.front())];
       d.size_change = size * radius_sign(own.faces[static_cast<std::size_t>(foot.face)].analytic->surface(), foot);
     }
+    d.axis = shared_axis(nominal, spec.faces);
     frame.datums.push_back(std::move(d));
     basis = basis * fit.free;
   }

@@ -1,11 +1,13 @@
 #include "qif_characteristics.hpp"
 
 #include <algorithm>
+#include <array>
 #include <functional>
 #include <initializer_list>
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 #include <pugixml.hpp>
 
@@ -15,20 +17,29 @@ namespace probecomp::results {
 
 namespace {
 
-// The first child of `parent` named one of `names`; null when none is there.
-pugi::xml_node first_of(pugi::xml_node parent, std::initializer_list<const char*> names) {
+// QIFDocument's sections in the order of its sequence (QIFDocument.xsd), and a MeasurementResults' (QIFResults.xsd),
+// from those this file adds on.
+constexpr std::array kDocumentSections = {
+    "StandardsDefinitions", "SoftwareDefinitions", "AlgorithmDefinitions", "PreInspectionTraceability", "FileUnits",
+    "DatumDefinitions", "DatumTargetDefinitions", "Transforms", "CoordinateSystems", "DatumReferenceFrames",
+    "MeasurementResources", "ThreadSpecifications", "Product", "Features", "FeatureZones", "Characteristics", "Plan",
+    "Results", "Statistics", "ManufacturingProcessTraceabilities", "Rules", "UserDataXML", "Signature"};
+constexpr std::array kMeasurementResultsSections = {"MeasuredCharacteristics", "ActualTransforms",
+                                                    "CoordinateSystemActualTransformAssociations", "InspectionStatus",
+                                                    "ActualComponentIds"};
+
+// `name`, one of `order`, inserted where that sequence puts it: before the first section after it that `parent`
+// has, else at the end.
+template <std::size_t N>
+pugi::xml_node insert(pugi::xml_node parent, const char* name, const std::array<const char*, N>& order) {
+  const auto at = std::find_if(order.begin(), order.end(), [&](const char* n) { return std::string_view(n) == name; });
+  if (at == order.end()) throw std::logic_error(std::string("QIF section ") + name + " is not in its parent's sequence");
   for (pugi::xml_node c : parent.children()) {
-    for (const char* n : names) {
-      if (std::string(c.name()) == n) return c;
+    if (std::find_if(at + 1, order.end(), [&](const char* n) { return std::string_view(n) == c.name(); }) != order.end()) {
+      return parent.insert_child_before(name, c);
     }
   }
-  return {};
-}
-
-// `name` inserted where QIF's sequence puts it: before the first of `after_it` present, else at the end.
-pugi::xml_node insert(pugi::xml_node parent, const char* name, std::initializer_list<const char*> after_it) {
-  const pugi::xml_node before = first_of(parent, after_it);
-  return before ? parent.insert_child_before(name, before) : parent.append_child(name);
+  return parent.append_child(name);
 }
 
 void text(pugi::xml_node parent, const char* name, const std::string& value) {
@@ -58,15 +69,6 @@ const char* status(inspection::Decision d) {
   return "NOT_ANALYZED";
 }
 
-// The sections that follow `name` in QIFDocument's sequence (QIFDocument.xsd), for insert().
-constexpr std::initializer_list<const char*> kAfterDatumDefinitions = {
-    "DatumTargetDefinitions", "Transforms", "CoordinateSystems", "DatumReferenceFrames", "MeasurementResources",
-    "ThreadSpecifications", "Product", "Features", "FeatureZones", "Characteristics", "Plan", "Results", "Statistics",
-    "ManufacturingProcessTraceabilities", "Rules", "UserDataXML", "Signature"};
-constexpr std::initializer_list<const char*> kAfterDatumReferenceFrames = {
-    "MeasurementResources", "ThreadSpecifications", "Product", "Features", "FeatureZones", "Characteristics", "Plan",
-    "Results", "Statistics", "ManufacturingProcessTraceabilities", "Rules", "UserDataXML", "Signature"};
-
 const char* precedence(std::size_t k) {
   static constexpr const char* kOrder[] = {"PRIMARY", "SECONDARY", "TERTIARY", "QUATERNARY", "QUINARY", "SENARY"};
   return kOrder[std::min<std::size_t>(k, 5)];
@@ -87,7 +89,7 @@ std::map<std::string, std::string> add_datum_frames(pugi::xml_node root, const i
   }
   if (framed.empty()) return frame_ids;
 
-  pugi::xml_node definitions = insert(root, "DatumDefinitions", kAfterDatumDefinitions);
+  pugi::xml_node definitions = insert(root, "DatumDefinitions", kDocumentSections);
   for (const inspection::CharacteristicSpec* c : framed) {
     for (const std::string& label : c->datums) {
       if (datum_ids.contains(label)) continue;
@@ -105,7 +107,7 @@ std::map<std::string, std::string> add_datum_frames(pugi::xml_node root, const i
   }
   definitions.prepend_attribute("n") = static_cast<int>(datum_ids.size());
 
-  pugi::xml_node frames = insert(root, "DatumReferenceFrames", kAfterDatumReferenceFrames);
+  pugi::xml_node frames = insert(root, "DatumReferenceFrames", kDocumentSections);
   for (const inspection::CharacteristicSpec* c : framed) {
     std::string key;
     for (const std::string& d : c->datums) key.append(key.empty() ? "" : "|").append(d);
@@ -137,22 +139,21 @@ std::map<std::string, std::string> add_datum_frames(pugi::xml_node root, const i
 // `results`, its actual transform (ActualTransforms), the two tied by a CoordinateSystemActualTransformAssociation.
 // The transform takes coordinates in the frame (the nominal's, the part located by its datums) to the document's
 // measured ones: X = R·x + O (TransformMatrixType), R's columns the XDirection, YDirection and ZDirection.
+//
+// How each was set up is its AlignmentOperations: a DatumPrecedence on its datum reference frame (`frame_ids`), with
+// the primary datum's direction and the secondary's square to it, in the nominal's coordinates. Written where the
+// primary has one (DatumResult::axis: a plane, cylinder or cone), which QIF requires.
 void add_actual_frames(pugi::xml_node root, pugi::xml_node results, const inspection::Inspection& inspection,
-                       const std::function<std::string()>& next, const std::function<std::string(double)>& length) {
+                       const std::map<std::string, std::string>& frame_ids, const std::function<std::string()>& next,
+                       const std::function<std::string(double)>& length) {
   std::vector<std::pair<const std::string*, const inspection::DatumFrame*>> located;
   for (const auto& [key, frame] : inspection.frames) {
     if (!key.empty() && frame.ok()) located.emplace_back(&key, &frame);
   }
   if (located.empty()) return;
-  std::initializer_list<const char*> after_systems = {
-      "DatumReferenceFrames", "MeasurementResources", "ThreadSpecifications", "Product", "Features", "FeatureZones",
-      "Characteristics", "Plan", "Results", "Statistics", "ManufacturingProcessTraceabilities", "Rules", "UserDataXML",
-      "Signature"};
-  pugi::xml_node systems = insert(root, "CoordinateSystems", after_systems).append_child("CoordinateSystemDefinitions");
-  pugi::xml_node transforms = insert(results, "ActualTransforms", {"CoordinateSystemActualTransformAssociations",
-                                                                   "InspectionStatus", "ActualComponentIds"});
-  pugi::xml_node associations = insert(results, "CoordinateSystemActualTransformAssociations",
-                                       {"InspectionStatus", "ActualComponentIds"});
+  pugi::xml_node systems = insert(root, "CoordinateSystems", kDocumentSections).append_child("CoordinateSystemDefinitions");
+  pugi::xml_node transforms = insert(results, "ActualTransforms", kMeasurementResultsSections);
+  pugi::xml_node associations = insert(results, "CoordinateSystemActualTransformAssociations", kMeasurementResultsSections);
   const auto vector = [](const Vector3& v) {
     return io::fixed(v.x(), 12) + " " + io::fixed(v.y(), 12) + " " + io::fixed(v.z(), 12);
   };
@@ -161,6 +162,22 @@ void add_actual_frames(pugi::xml_node root, pugi::xml_node results, const inspec
     pugi::xml_node system = systems.append_child("CoordinateSystem");
     system.append_attribute("id") = system_id.c_str();
     text(system, "Name", *key);
+    const auto drf = frame_ids.find(*key);
+    if (drf != frame_ids.end() && !frame->datums.empty() && frame->datums.front().axis) {
+      pugi::xml_node operations = system.append_child("AlignmentOperations");
+      operations.append_attribute("n") = 1;
+      pugi::xml_node precedence = operations.append_child("DatumPrecedence");
+      text(precedence, "SequenceNumber", "1");
+      text(precedence, "DatumReferenceFrameId", drf->second);
+      const Vector3 primary = *frame->datums.front().axis;
+      text(precedence, "PrimaryAxis", vector(primary));
+      if (frame->datums.size() > 1 && frame->datums[1].axis) {
+        // Square to the primary; none where it lies along it (a hole's axis under a primary plane, 1e-3 rad and
+        // less: what is left would be mostly rounding), its location then setting the direction.
+        const Vector3 secondary = *frame->datums[1].axis - frame->datums[1].axis->dot(primary) * primary;
+        if (secondary.norm() > 1e-3) text(precedence, "SecondaryAxis", vector(secondary.normalized()));
+      }
+    }
 
     pugi::xml_node t = transforms.append_child("Transform");
     t.append_attribute("id") = transform_id.c_str();
@@ -201,14 +218,7 @@ void add_characteristics(std::string& xml, const inspection::Inspection& inspect
   // ISO 1101 (geometrical tolerancing) as the formal standard the characteristics are stated against.
   pugi::xml_node standards = root.child("StandardsDefinitions");
   if (!standards) {
-    standards = insert(root, "StandardsDefinitions", {"SoftwareDefinitions", "AlgorithmDefinitions",
-                                                      "PreInspectionTraceability", "FileUnits", "DatumDefinitions",
-                                                      "DatumTargetDefinitions", "Transforms", "CoordinateSystems",
-                                                      "DatumReferenceFrames", "MeasurementResources",
-                                                      "ThreadSpecifications", "Product", "Features", "FeatureZones",
-                                                      "Characteristics", "Plan", "Results", "Statistics",
-                                                      "ManufacturingProcessTraceabilities", "Rules", "UserDataXML",
-                                                      "Signature"});
+    standards = insert(root, "StandardsDefinitions", kDocumentSections);
     standards.append_attribute("n") = 0;
   }
   const std::string standard_id = next();
@@ -220,9 +230,7 @@ void add_characteristics(std::string& xml, const inspection::Inspection& inspect
 
   const std::map<std::string, std::string> frame_ids = add_datum_frames(root, inspection, next);
 
-  pugi::xml_node characteristics = insert(root, "Characteristics", {"Plan", "Results", "Statistics",
-                                                                    "ManufacturingProcessTraceabilities", "Rules",
-                                                                    "UserDataXML", "Signature"});
+  pugi::xml_node characteristics = insert(root, "Characteristics", kDocumentSections);
   text(characteristics, "FormalStandardId", standard_id);
   pugi::xml_node definitions = characteristics.append_child("CharacteristicDefinitions");
   pugi::xml_node nominals = characteristics.append_child("CharacteristicNominals");
@@ -233,10 +241,8 @@ void add_characteristics(std::string& xml, const inspection::Inspection& inspect
   // In the first MeasurementResults: what was measured of each.
   pugi::xml_node results = root.child("Results").child("MeasurementResultsSet").child("MeasurementResults");
   if (!results) throw std::logic_error("the QIF document written has no MeasurementResults");
-  pugi::xml_node measured = insert(results, "MeasuredCharacteristics", {"ActualTransforms",
-                                                                        "CoordinateSystemActualTransformAssociations",
-                                                                        "InspectionStatus", "ActualComponentIds"})
-                                .append_child("CharacteristicMeasurements");
+  pugi::xml_node measured =
+      insert(results, "MeasuredCharacteristics", kMeasurementResultsSections).append_child("CharacteristicMeasurements");
   measured.append_attribute("n") = n;
 
   for (const inspection::CharacteristicResult& c : inspection.characteristics) {
@@ -280,7 +286,7 @@ void add_characteristics(std::string& xml, const inspection::Inspection& inspect
       text(m, "MinValue", length(c.min));
     }
   }
-  add_actual_frames(root, results, inspection, next, length);
+  add_actual_frames(root, results, inspection, frame_ids, next, length);
   root.attribute("idMax").set_value(static_cast<long long>(id));
   std::ostringstream out;
   doc.save(out, "  ", pugi::format_default, pugi::encoding_utf8);

@@ -234,6 +234,10 @@ TEST(DatumFrame, AHoleAsSecondaryDatumCentresItsAxisWhateverItsSize) {
   ASSERT_TRUE(frame.datums.at(1).size_change.has_value());
   EXPECT_NEAR(*frame.datums.at(1).size_change, 0.005, 1e-8);
   EXPECT_LT(frame.datums.at(1).rms, 1e-8);
+  // Their directions on the nominal (QIF's DatumPrecedence): the bottom's outward normal, the hole's axis (z either way).
+  ASSERT_TRUE(frame.datums.at(0).axis && frame.datums.at(1).axis);
+  EXPECT_LT((*frame.datums.at(0).axis - Vector3(0, 0, -1)).norm(), 1e-12);
+  EXPECT_LT(frame.datums.at(1).axis->cross(Vector3::UnitZ()).norm(), 1e-12);
   // As the primary datum, an axis fixes four motions.
   const DatumFrame alone = establish_frame({{"D", {block().hole}}}, block().model, r);
   ASSERT_TRUE(alone.ok()) << alone.reason;

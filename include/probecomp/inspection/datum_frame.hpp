@@ -57,6 +57,10 @@ struct DatumResult {
   int fixes = 0;     // motions it fixed, of those the datums before it left free
   double rms = 0.0;  // of its points' distances from the fitted datum, mm
   std::optional<double> size_change;  // cylinder or sphere: fitted radius minus nominal, mm
+  // Its direction on the nominal (CAD frame, unit): a plane's outward normal, a cylinder's or cone's axis (as the
+  // file orients it), when all its faces share it; none for a sphere, a free-form face or faces that differ. QIF's
+  // DatumPrecedence alignment gives it.
+  std::optional<Vector3> axis;
 };
 
 // Motions are scaled twists δ = (L·ω, v) about `centre` (registration::motion_about), L = `length`.
