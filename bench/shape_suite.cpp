@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
   double sigma = -1.0;
   int draw = 0;
   std::uint64_t first = 1;
-  bool reference = true, regions = false, plain_reference = false;
+  bool reference = true, regions = false, plain_reference = false, stops = false;
   std::vector<std::string> only;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
@@ -81,8 +81,10 @@ int main(int argc, char** argv) {
       plain_reference = true;
     } else if (arg == "--regions") {
       regions = true;
+    } else if (arg == "--stops") {
+      stops = true;
     } else {
-      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions]\n",
+      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops]\n",
                    argv[0]);
       return 2;
     }
@@ -129,6 +131,13 @@ int main(int argc, char** argv) {
                   r.name.c_str(), r.sigma, r.rows, r.std, r.mean, r.max, r.flagged, r.coverage, r.worst_region, r.mean_u,
                   r.fit_rms, r.reference_std, r.reference_max, r.std / r.reference_std, features.c_str(),
                   c.sampling == simulation::Sampling::Random && !c.approach_normals ? " (no i,j,k)" : "");
+      if (stops) {
+        // Where each face's refinement stopped, and why: what a basis with local refinement could change.
+        for (const compensation::FaceReport& f : s.cad.faces) {
+          std::printf("    face %d: %d points, %d control points, %d rounds, %d fits: %s\n", f.face, f.points,
+                      f.control_points, f.rounds, f.fits, f.stop_reason.c_str());
+        }
+      }
       if (regions) {
         std::array<double, 36> e2{}, u2{}, a2{};
         std::array<int, 36> n{}, in{};

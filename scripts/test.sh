@@ -43,6 +43,9 @@ if [ "${1:-}" = "--sanitize" ]; then
                                                                         #   targets in DatumFrame.PointTargets...)
     Pmi.MagnitudesAreReadInTheirUnitsOrNamedNotZero                     # Pmi.MagnitudesInComplexEntities... (the same
                                                                         #   reader on the same file), fuzz_cad_step
+    NistCharacteristics.StcEightsProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay  # DatumLocation.* (a part
+                                                                        #   located by its datum features); StcSixs...
+                                                                        #   and FtcSixs... (the NIST path)
   )
   exclude=(-E "^($(IFS='|'; echo "${release_only[*]}"))\$")
 fi

@@ -54,8 +54,9 @@ namespace {
 
 using detail::fail;
 
-// A point or line datum target's placement lies on a face of the file's own geometry, to the precision of its coordinates (STEP files
-// write 10–15 digits) and the closest-point solver's (1e-9 mm): 1 µm takes the face it is on and no other.
+// A point or line datum target's placement lies on a face of the file's own geometry, to the precision of its
+// coordinates (STEP files write 10–15 digits) and the closest-point solver's (1e-9 mm): 1 µm takes the face it is on
+// and no other.
 constexpr double kTargetOnFace = 1e-3;
 // A line datum target runs along its face: the cosine of its direction with the face's normal where it is placed is
 // at most this (its directions written to 10–15 digits; FTC-06's are exact, 0).

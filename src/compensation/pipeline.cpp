@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <array>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <optional>
@@ -49,10 +49,6 @@ void check_registration(const registration::RegistrationResult& r) {
     throw RegistrationError(std::string("registration failed (") + registration::to_string(r.status) + "): " +
                                 r.stop_reason);
   }
-}
-
-int located_count(const registration::RegistrationResult& r) {
-  return static_cast<int>(std::count_if(r.located_by.begin(), r.located_by.end(), [](std::uint8_t f) { return f != 0; }));
 }
 
 // The part located by the points on its datum features alone, from `start` (RegisterOptions::datum_faces): kept when
@@ -226,7 +222,7 @@ registration::RegistrationResult register_centres(const PreparedModel& prepared,
     if (by_datums) {
       by_datums->starts = starts;
       by_datums->notes.push_back("the best fit of all the points was not credible (" + verdict.reason + "; " + tried +
-                                 " found none credible): the part was located by the " + std::to_string(located_count(*by_datums)) +
+                                 " found none credible): the part was located by the " + std::to_string(by_datums->locating_points()) +
                                  " points on its datum features alone, as its drawing does; the other faces' deviations "
                                  "are from there");
       return *std::move(by_datums);

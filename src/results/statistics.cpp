@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -153,10 +152,7 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
                        {"starts", reg.starts},
                        {"left_out", reg.left_out},
                        {"located_by", reg.located_by.empty() ? "all-points" : "datum-features"},
-                       {"locating_points", reg.located_by.empty()
-                                               ? static_cast<long>(reg.matches.size())
-                                               : static_cast<long>(std::count_if(reg.located_by.begin(), reg.located_by.end(),
-                                                                                 [](std::uint8_t f) { return f != 0; }))},
+                       {"locating_points", reg.locating_points()},
                        {"free_motions", free}};
 
   Json faces = Json::array();

@@ -27,12 +27,7 @@ constexpr double kProud = 0.9;  // mm, outward, on the top, right and back faces
 
 struct Measured {
   cad::Model nominal = testing::block_with_hole();
-  int bottom = testing::face_through(nominal, Point3(10, 10, 0));
-  int front = testing::face_through(nominal, Point3(10, 0, 10));
-  int left = testing::face_through(nominal, Point3(0, 10, 10));
-  int top = testing::face_through(nominal, Point3(10, 10, 20));
-  int right = testing::face_through(nominal, Point3(60, 10, 10));
-  int back = testing::face_through(nominal, Point3(10, 40, 10));
+  testing::BlockWithHoleFaces f = testing::faces_of_block_with_hole(nominal);
   geometry::RigidTransform placement =
       Eigen::Translation3d(3.0, -2.0, 1.5) * Eigen::AngleAxisd(4.0 * M_PI / 180, Vector3(2, -1, 3).normalized());
   std::vector<Point3> centres;
@@ -44,7 +39,7 @@ struct Measured {
 const Measured& measured() {
   static const Measured m = [] {
     Measured m;
-    std::map<int, double> moved{{m.top, kProud}, {m.right, kProud}, {m.back, kProud}};
+    std::map<int, double> moved{{m.f.top, kProud}, {m.f.right, kProud}, {m.f.back, kProud}};
     cad::Model actual = m.nominal;
     for (const auto& [f, move] : moved) {
       cad::Model one;
@@ -59,18 +54,18 @@ const Measured& measured() {
     for (double x = 5; x <= 55; x += 5) {
       for (double y = 5; y <= 35; y += 5) {
         if (std::hypot(x - 40, y - 20) < 7) continue;
-        add(Point3(x, y, 0), -Vector3::UnitZ(), m.bottom);
-        add(Point3(x, y, 20), Vector3::UnitZ(), m.top);
+        add(Point3(x, y, 0), -Vector3::UnitZ(), m.f.bottom);
+        add(Point3(x, y, 20), Vector3::UnitZ(), m.f.top);
       }
       for (double z = 4; z <= 16; z += 4) {
-        add(Point3(x, 0, z), -Vector3::UnitY(), m.front);
-        add(Point3(x, 40, z), Vector3::UnitY(), m.back);
+        add(Point3(x, 0, z), -Vector3::UnitY(), m.f.front);
+        add(Point3(x, 40, z), Vector3::UnitY(), m.f.back);
       }
     }
     for (double y = 5; y <= 35; y += 5) {
       for (double z = 4; z <= 16; z += 4) {
-        add(Point3(0, y, z), -Vector3::UnitX(), m.left);
-        add(Point3(60, y, z), Vector3::UnitX(), m.right);
+        add(Point3(0, y, z), -Vector3::UnitX(), m.f.left);
+        add(Point3(60, y, z), Vector3::UnitX(), m.f.right);
       }
     }
     const cad::Model placed = simulation::actual_model(actual, {}, m.placement);
@@ -108,7 +103,7 @@ TEST(DatumLocation, WithoutDatumsAPartThatDeviatesByAboutItsRadiusIsRefusedAsDou
 
 TEST(DatumLocation, ThreeTwoOnePlanesLocateThePartAndTheOtherFacesReadTheirMoves) {
   const Measured& m = measured();
-  const CompensationResult r = compensate(m.nominal, m.centres, m.normals, options_with({m.bottom, m.front, m.left}));
+  const CompensationResult r = compensate(m.nominal, m.centres, m.normals, options_with({m.f.bottom, m.f.front, m.f.left}));
   ASSERT_FALSE(r.registration.located_by.empty());
   const bool noted = std::any_of(r.registration.notes.begin(), r.registration.notes.end(), [](const std::string& n) {
     return n.find("located by the") != std::string::npos && n.find("datum features") != std::string::npos;
@@ -116,7 +111,7 @@ TEST(DatumLocation, ThreeTwoOnePlanesLocateThePartAndTheOtherFacesReadTheirMoves
   EXPECT_TRUE(noted);
   // Only the datum faces' points located it.
   for (std::size_t k = 0; k < m.centres.size(); ++k) {
-    const bool on_datum = m.faces[k] == m.bottom || m.faces[k] == m.front || m.faces[k] == m.left;
+    const bool on_datum = m.faces[k] == m.f.bottom || m.faces[k] == m.f.front || m.faces[k] == m.f.left;
     EXPECT_EQ(r.registration.located_by[k] != 0, on_datum) << "row " << k;
   }
   // Where it put the part: the block's corners within 3 µm of the placement (σ = 2 µm on about 220 datum touches).
@@ -147,7 +142,7 @@ TEST(DatumLocation, ThreeTwoOnePlanesLocateThePartAndTheOtherFacesReadTheirMoves
 TEST(DatumLocation, DatumsThatLeaveMotionsFreeDoNotLocateThePartAndTheRefusalSaysSo) {
   const Measured& m = measured();
   try {
-    (void)compensate(m.nominal, m.centres, m.normals, options_with({m.bottom}));
+    (void)compensate(m.nominal, m.centres, m.normals, options_with({m.f.bottom}));
     FAIL() << "a plane alone was taken to locate the part";
   } catch (const RegistrationError& e) {
     EXPECT_NE(std::string(e.what()).find("fixes 3 of the 6 motions only"), std::string::npos) << e.what();

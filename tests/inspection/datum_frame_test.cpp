@@ -20,15 +20,12 @@ namespace {
 
 using geometry::RigidTransform;
 
-struct Block {
+// The model first (bases are built in their order), then its faces.
+struct BlockModel {
   cad::Model model = testing::block_with_hole();
-  int bottom = testing::face_through(model, Point3(10, 10, 0));
-  int front = testing::face_through(model, Point3(10, 0, 10));
-  int left = testing::face_through(model, Point3(0, 10, 10));
-  int top = testing::face_through(model, Point3(10, 10, 20));
-  int right = testing::face_through(model, Point3(60, 10, 10));
-  int back = testing::face_through(model, Point3(10, 40, 10));
-  int hole = testing::face_through(model, Point3(45, 20, 10));
+};
+struct Block : BlockModel, testing::BlockWithHoleFaces {
+  Block() : testing::BlockWithHoleFaces(testing::faces_of_block_with_hole(model)) {}
 };
 
 const Block& block() {
@@ -329,6 +326,28 @@ TEST(DatumFrame, ThreeTwoOnePointsFixEveryMotion) {
   EXPECT_NEAR(right.max, -0.005, 1e-7);
 }
 
+// The top's profile in A|B|C, A on the bottom by `targets`, B the front, C the left.
+Specification top_in_abc(const std::vector<Target>& targets) {
+  const Block& b = block();
+  Specification spec;
+  spec.datums = {{.name = "A", .faces = {b.bottom}, .fit = DatumFit::LeastSquares, .targets = targets},
+                 {"B", {b.front}}, {"C", {b.left}}};
+  spec.characteristics = {{.name = "P", .faces = {b.top}, .tolerance = 0.1, .outside = {}, .datums = {"A", "B", "C"}}};
+  return spec;
+}
+
+// `spec` (top_in_abc) on `r`: the top 0.01 mm in, A fitted to `a_points` touches that fix 3 motions.
+void expect_top_a_hundredth_in(const Specification& spec, const compensation::CompensationResult& r, int a_points) {
+  const Inspection judged = evaluate(spec, block().model, r);
+  const CharacteristicResult& top = judged.characteristics.at(0);
+  ASSERT_NE(top.decision, Decision::NotEvaluated) << top.reason;
+  EXPECT_NEAR(top.min, -0.01, 1e-7);
+  EXPECT_NEAR(top.max, -0.01, 1e-7);
+  const DatumFrame& frame = judged.frames.at("A|B|C");
+  EXPECT_EQ(frame.datums.at(0).points, a_points);
+  EXPECT_EQ(frame.datums.at(0).fixes, 3);
+}
+
 // Datum A by three point targets on the bottom (A1–A3), which is 0.05 mm up everywhere but at them, where it is
 // 0.01 mm up: A is the plane through the three touches alone, so in A|B|C the top lies 0.01 mm in (a fit of the
 // whole bottom would put it about 0.05 mm in). A target no trusted point touches keeps the frame from being set up.
@@ -343,18 +362,8 @@ TEST(DatumFrame, PointTargetsTakeOnlyTheTouchesAtThem) {
     return Point3(p + Vector3(0, 0, 0.05));
   };
   const compensation::CompensationResult r = measure(part);
-  Specification spec;
-  spec.datums = {{.name = "A", .faces = {b.bottom}, .fit = DatumFit::LeastSquares, .targets = targets},
-                 {"B", {b.front}}, {"C", {b.left}}};
-  spec.characteristics = {{.name = "P", .faces = {b.top}, .tolerance = 0.1, .outside = {}, .datums = {"A", "B", "C"}}};
-  const Inspection judged = evaluate(spec, b.model, r);
-  const CharacteristicResult& top = judged.characteristics.at(0);
-  ASSERT_NE(top.decision, Decision::NotEvaluated) << top.reason;
-  EXPECT_NEAR(top.min, -0.01, 1e-7);
-  EXPECT_NEAR(top.max, -0.01, 1e-7);
-  const DatumFrame& frame = judged.frames.at("A|B|C");
-  EXPECT_EQ(frame.datums.at(0).points, 3);
-  EXPECT_EQ(frame.datums.at(0).fixes, 3);
+  Specification spec = top_in_abc(targets);
+  expect_top_a_hundredth_in(spec, r, 3);
 
   // A3 moved 2.5 mm off the nearest touch.
   spec.datums[0].targets[2].point = Point3(22.5, 35, 0);
@@ -377,18 +386,8 @@ TEST(DatumFrame, LineTargetsTakeOnlyTheTouchesAlongThem) {
     return Point3(p + Vector3(0, 0, on_line ? 0.01 : 0.05));
   };
   const compensation::CompensationResult r = measure(part);
-  Specification spec;
-  spec.datums = {{.name = "A", .faces = {b.bottom}, .fit = DatumFit::LeastSquares, .targets = targets},
-                 {"B", {b.front}}, {"C", {b.left}}};
-  spec.characteristics = {{.name = "P", .faces = {b.top}, .tolerance = 0.1, .outside = {}, .datums = {"A", "B", "C"}}};
-  const Inspection judged = evaluate(spec, b.model, r);
-  const CharacteristicResult& top = judged.characteristics.at(0);
-  ASSERT_NE(top.decision, Decision::NotEvaluated) << top.reason;
-  EXPECT_NEAR(top.min, -0.01, 1e-7);
-  EXPECT_NEAR(top.max, -0.01, 1e-7);
-  const DatumFrame& frame = judged.frames.at("A|B|C");
-  EXPECT_EQ(frame.datums.at(0).points, 14);  // the grid's 7 touches along each line
-  EXPECT_EQ(frame.datums.at(0).fixes, 3);
+  Specification spec = top_in_abc(targets);
+  expect_top_a_hundredth_in(spec, r, 14);  // the grid's 7 touches along each line
 
   // A2 moved to x = 22.5, 2.5 mm from the nearest touches.
   spec.datums[0].targets[1].point = Point3(22.5, 20, 0);

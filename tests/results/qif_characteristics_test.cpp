@@ -40,10 +40,7 @@ Vector3 vector_of(const char* text) {
 TEST(QifCharacteristics, AFrameOnPlanesIsSetUpByDatumPrecedenceWithItsDatumsDirections) {
   ASSERT_EQ(std::system("xmllint --version >/dev/null 2>&1"), 0) << "xmllint is missing (Debian libxml2-utils)";
   const cad::Model model = testing::block_with_hole();
-  const int bottom = testing::face_through(model, Point3(10, 10, 0));
-  const int front = testing::face_through(model, Point3(10, 0, 10));
-  const int left = testing::face_through(model, Point3(0, 10, 10));
-  const int top = testing::face_through(model, Point3(10, 10, 20));
+  const testing::BlockWithHoleFaces f = testing::faces_of_block_with_hole(model);
   // The part exactly nominal and where the CAD puts it: grids on the four faces.
   compensation::CompensationResult result;
   std::ostringstream csv;
@@ -59,17 +56,17 @@ TEST(QifCharacteristics, AFrameOnPlanesIsSetUpByDatumPrecedenceWithItsDatumsDire
   };
   for (double x = 5; x <= 25; x += 5) {
     for (double y = 5; y <= 35; y += 10) {
-      add(Point3(x, y, 0), bottom);
-      add(Point3(x, y, 20), top);
+      add(Point3(x, y, 0), f.bottom);
+      add(Point3(x, y, 20), f.top);
     }
-    for (double z = 5; z <= 15; z += 5) add(Point3(x, 0, z), front);
+    for (double z = 5; z <= 15; z += 5) add(Point3(x, 0, z), f.front);
   }
   for (double y = 5; y <= 35; y += 10) {
-    for (double z = 5; z <= 15; z += 5) add(Point3(0, y, z), left);
+    for (double z = 5; z <= 15; z += 5) add(Point3(0, y, z), f.left);
   }
   inspection::Specification spec;
-  spec.datums = {{"A", {bottom}}, {"B", {front}}, {"C", {left}}};
-  spec.characteristics = {{.name = "P", .faces = {top}, .tolerance = 0.1, .outside = {}, .datums = {"A", "B", "C"}}};
+  spec.datums = {{"A", {f.bottom}}, {"B", {f.front}}, {"C", {f.left}}};
+  spec.characteristics = {{.name = "P", .faces = {f.top}, .tolerance = 0.1, .outside = {}, .datums = {"A", "B", "C"}}};
   const inspection::Inspection judged = inspection::evaluate(spec, model, result);
   ASSERT_TRUE(judged.frames.at("A|B|C").ok()) << judged.frames.at("A|B|C").reason;
 

@@ -80,6 +80,16 @@ cad::Model block_with_hole() {
   return through_step(cut.Shape(), "block_with_hole");
 }
 
+BlockWithHoleFaces faces_of_block_with_hole(const cad::Model& model) {
+  return {.bottom = face_through(model, Point3(10, 10, 0)),
+          .front = face_through(model, Point3(10, 0, 10)),
+          .left = face_through(model, Point3(0, 10, 10)),
+          .top = face_through(model, Point3(10, 10, 20)),
+          .right = face_through(model, Point3(60, 10, 10)),
+          .back = face_through(model, Point3(10, 40, 10)),
+          .hole = face_through(model, Point3(45, 20, 10))};
+}
+
 cad::Model block_with_countersink() {
   const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), 60, 40, 20).Shape();
   const TopoDS_Shape cone = BRepPrimAPI_MakeCone(gp_Ax2(gp_Pnt(30, 20, 12), gp_Dir(0, 0, 1)), 4, 9, 9).Shape();

@@ -8,6 +8,11 @@ namespace probecomp::testing {
 
 // A 60 × 40 × 20 mm block from the origin along +x, +y, +z, with a through hole of radius 5 along z at (40, 20).
 [[nodiscard]] cad::Model block_with_hole();
+// Its faces (positions in model.faces), by where they are: z = 0, y = 0, x = 0, z = 20, x = 60, y = 40, the hole.
+struct BlockWithHoleFaces {
+  int bottom = -1, front = -1, left = -1, top = -1, right = -1, back = -1, hole = -1;
+};
+[[nodiscard]] BlockWithHoleFaces faces_of_block_with_hole(const cad::Model& model);
 
 // A 60 × 40 × 20 mm block from the origin with a conical pocket (a countersink's shape) about the vertical through
 // (30, 20): radius 4 at its flat floor z = 12, widening at 29.05° (tan = 5/9) to radius 9 at z = 21, above the top.

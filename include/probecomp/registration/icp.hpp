@@ -8,6 +8,7 @@
 //                 where point-to-point slides slowly along flat or gently curved surfaces.
 // Motions the data cannot fix (see constraints.hpp) are held at the starting transform.
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -91,6 +92,12 @@ struct RegistrationResult {
   // Empty: every usable point located the part. Else one per point, nonzero for those that did (its datum features'
   // points; RegistrationOptions::located_by): the credibility checks and a second registration keep to them.
   std::vector<std::uint8_t> located_by;
+
+  // How many points located the part: those marked in located_by, or all of them.
+  [[nodiscard]] std::size_t locating_points() const {
+    if (located_by.empty()) return matches.size();
+    return static_cast<std::size_t>(std::count_if(located_by.begin(), located_by.end(), [](std::uint8_t f) { return f != 0; }));
+  }
 
   [[nodiscard]] bool converged() const { return status == Status::Converged; }
 };
