@@ -41,8 +41,10 @@ if [ "${1:-}" = "--sanitize" ]; then
     NistCharacteristics.CtcTwosProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay  # NistCharacteristics.Stc*, Ftc*
                                                                         #   (the frames and characteristics; point
                                                                         #   targets in DatumFrame.PointTargets...)
-    Pmi.MagnitudesAreReadInTheirUnitsOrNamedNotZero                     # Pmi.MagnitudesInComplexEntities... (the same
-                                                                        #   reader on the same file), fuzz_cad_step
+    Pmi.MagnitudesAreReadInTheirUnitsOrNamedNotZero                     # fuzz_cad_step (the same reader, seeded with
+    Pmi.MagnitudesInComplexEntitiesAreReadFromTheFilesOwnText           #   CTC-02's forms), Pmi.FtcSix... (read_pmi)
+    Trim.DomainEdgeLinesOfTheDieCastSampleAgreeWithOpenCascade          # Trim.ALoopThatMeets... (the trim), and
+                                                                        #   cli.shop_floor (the die-cast part read)
     NistCharacteristics.StcEightsProfilesAreJudgedInTheirDatumFramesAsTheirMovesSay  # DatumLocation.* (a part
                                                                         #   located by its datum features); StcSixs...
                                                                         #   and FtcSixs... (the NIST path)
