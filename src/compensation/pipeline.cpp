@@ -309,7 +309,7 @@ void register_without_outliers(const PreparedModel& prepared, std::span<const Po
   if (flagged.empty() || !registration::leaving_out_moves(*prepared.locator, raw, icp, r, flagged)) return;
   registration::RegistrationOptions again = icp;
   again.initial = r.transform;
-  std::vector<Point3> kept(raw.begin(), raw.end());
+  std::vector<Point3> kept;
   std::vector<std::uint8_t> locating;
   if (by_features) {
     locating = r.located_by;
@@ -317,13 +317,15 @@ void register_without_outliers(const PreparedModel& prepared, std::span<const Po
     again.located_by = locating;
   } else {
     // Not finite: reported by ICP, never used.
+    kept.assign(raw.begin(), raw.end());
     for (const std::size_t k : flagged) kept[k] = Point3::Constant(std::numeric_limits<double>::quiet_NaN());
   }
+  const std::span<const Point3> registered = by_features ? raw : std::span<const Point3>(kept);
   registration::RegistrationResult second = registration::register_to_offset_model(
-      *prepared.offset, *prepared.locator, kept, again, prepared.radii.beyond_smallest());
+      *prepared.offset, *prepared.locator, registered, again, prepared.radii.beyond_smallest());
   if (!second.converged()) return;
-  for (std::size_t k = 0; k < kept.size(); ++k) {
-    if (!kept[k].allFinite()) second.matches[k] = r.matches[k];
+  for (std::size_t k = 0; k < registered.size(); ++k) {
+    if (!registered[k].allFinite()) second.matches[k] = r.matches[k];
   }
   second.iterations += r.iterations;
   second.searches += r.searches;

@@ -105,7 +105,7 @@ double radius_sign(const cad::ElementarySurface& s, const cad::ModelPoint& foot)
 }  // namespace
 
 double Target::distance(const Point3& x) const {
-  if (direction == Vector3::Zero()) return (x - point).norm();
+  if (!line()) return (x - point).norm();
   const double along = std::clamp(direction.dot(x - point), -length, length);
   return (x - (point + along * direction)).norm();
 }
@@ -241,7 +241,7 @@ DatumFrame establish_frame(const std::vector<DatumSpec>& datums, const cad::Mode
       if (touches[t] > 0) continue;
       const Target& target = targets[t];
       char where[192];
-      if (target.direction == Vector3::Zero()) {
+      if (!target.line()) {
         std::snprintf(where, sizeof where, " mm of its target %s (%.3f, %.3f, %.3f)", target.label.c_str(),
                       target.point.x(), target.point.y(), target.point.z());
       } else {
@@ -361,8 +361,8 @@ compensation::CompensationResult aligned(const compensation::CompensationResult&
   for (std::size_t f = 0; f < nominal.faces.size(); ++f) position.emplace(nominal.faces[f].index, f);
   std::map<int, std::vector<std::size_t>> rows_of;  // by position in nominal.faces
   for (std::size_t k = 0; k < result.points.size(); ++k) {
-    const auto at = position.find(result.points[k].face);
     if (!result.points[k].computed()) continue;
+    const auto at = position.find(result.points[k].face);
     if (at != position.end()) {
       rows_of[static_cast<int>(at->second)].push_back(k);
     } else {

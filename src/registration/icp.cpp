@@ -227,6 +227,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
                            std::span<const double> offsets, double slide_reach = kSlideReach) {
   using Search = detail::IcpState::Search;
   RegistrationResult result;
+  result.located_by.assign(options.located_by.begin(), options.located_by.end());
   const std::size_t n = machine_points.size();
   const std::size_t needed = options.metric == Metric::PointToPlane ? 6 : 3;
   const bool hinted_start = !hints.empty();
@@ -257,10 +258,7 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
     result.iterations = it;
     if (used < needed) {
       result.status = Status::TooFewPoints;
-      const std::size_t locating = options.located_by.empty()
-                                       ? n
-                                       : static_cast<std::size_t>(std::count_if(options.located_by.begin(), options.located_by.end(),
-                                                                                [](std::uint8_t f) { return f != 0; }));
+      const std::size_t locating = options.located_by.empty() ? n : result.locating_points();
       result.stop_reason = "only " + std::to_string(used) + " of " + std::to_string(locating) +
                            (options.located_by.empty() ? " points" : " points that locate the part") +
                            " have a usable correspondence (not on a face edge, found, finite)";
@@ -311,7 +309,6 @@ RegistrationResult iterate(const cad::ModelLocator& model, std::span<const Point
   }
   result.transform = to_cad.inverse();
   state.finish(result);
-  result.located_by.assign(options.located_by.begin(), options.located_by.end());
   return result;
 }
 }  // namespace

@@ -69,7 +69,7 @@ Judged judge_as_moved(const std::filesystem::path& file, std::uint64_t seed = 7)
   for (const DatumSpec& d : spec.datums) {
     for (const Target& t : d.targets) {
       const int face = on_nominal.closest_point(t.point).face;
-      for (const double along : t.direction == Vector3::Zero() ? std::vector<double>{0.0} : std::vector<double>{-0.25, 0.0, 0.25}) {
+      for (const double along : !t.line() ? std::vector<double>{0.0} : std::vector<double>{-0.25, 0.0, 0.25}) {
         const Point3 at = t.point + along * t.length * t.direction;
         const cad::ModelPoint foot = on_nominal.closest_point(at);
         if (foot.face == face && std::abs(foot.distance) < 1e-6) plan.push_back({at, foot.normal, foot.face});

@@ -31,6 +31,7 @@ struct Target {
   Point3 point = Point3::Zero();        // on the nominal, mm
   Vector3 direction = Vector3::Zero();  // a line's (unit); zero for a point
   double length = 0.0;                  // a line's, mm
+  [[nodiscard]] bool line() const { return direction != Vector3::Zero(); }
   // How far `x` (CAD frame) is from it, mm.
   [[nodiscard]] double distance(const Point3& x) const;
 };
