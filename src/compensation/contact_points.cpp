@@ -45,7 +45,6 @@ namespace {
 
 using detail::as_smallest_tip;
 using detail::element_distance;
-using detail::element_noise;
 using detail::element_normal;
 using detail::normal_doubt;
 
@@ -94,16 +93,6 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
       for (std::size_t i = 0; i < ff.members.size(); ++i) element_outlier[ff.members[i]] = !ff.trusted[i];
     }
   }
-  // The noise of a point on an element face: the NURBS fits' (their median), which a few points cannot match,
-  // else the element's own residuals (which hold the face's form error too: on the safe side).
-  std::optional<double> fitted_noise;
-  {
-    std::vector<double> sigma;
-    for (const FaceFit& ff : fits.faces) {
-      if (ff.report.fitted) sigma.push_back(ff.fit->noise_sigma);
-    }
-    if (!sigma.empty()) fitted_noise = geometry::median_in_place(sigma);
-  }
   tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
     if (!unfitted[k] || !raw[k].allFinite()) return;
     const registration::PointMatch& m = registration.matches[k];
@@ -135,8 +124,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
       c.contact = raw[k] - r * n;
       const cad::ModelPoint at = prepared.nominal_locator->closest_point(to_cad * c.contact, foot);
       c.deviation = at.ok() ? at.distance : foot.distance - r;
-      const double noise = fitted_noise ? *fitted_noise : element_noise(e);
-      c.uncertainty = std::isfinite(noise) ? noise : registration.scale;
+      c.uncertainty = std::isfinite(e.noise) ? e.noise : registration.scale;
       // An outlier's reading and the element disagree by its distance from it; which is right is not known.
       if (element_outlier[k]) c.uncertainty = std::hypot(c.uncertainty, std::abs(element_distance(e, raw[k])));
       return;
@@ -225,10 +213,9 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
   });
   // The registration's share of u, in quadrature with the fit's: the registered model's position along the
   // normal varies with the measurement noise as normal_variance says (most along weakly fixed motions). The noise
-  // is the fits' estimate (their median over the fitted faces), not the registration's residual scale, which
-  // holds the part's deformation too: that is what the deviations measure, not an uncertainty of where the
-  // model sits.
-  const double noise = fitted_noise.value_or(registration.scale);
+  // is the fits' estimate (FitResult::noise_sigma), not the registration's residual scale, which holds the part's
+  // deformation too: that is what the deviations measure, not an uncertainty of where the model sits.
+  const double noise = std::isfinite(fits.noise_sigma) ? fits.noise_sigma : registration.scale;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, raw.size(), 4096), [&](const auto& range) {
     for (std::size_t k = range.begin(); k != range.end(); ++k) {
       CompensatedPoint& c = out[k];

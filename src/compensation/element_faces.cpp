@@ -27,6 +27,16 @@ constexpr double kMaxRadiusChange = 0.1;  // mm
 // not apart (CTC-04: fits that moved the radius 0.2–0.26 mm and were refused before).
 constexpr double kMaxFittedStd = kMaxRadiusChange / 4.0;
 
+// A face whose residuals' χ² against the pooled noise is beyond the quantile that noise alone exceeds with this
+// probability is left out of the pool (element_face_noise). One in a hundred: on noise alone, a part of 60 element
+// faces has one left out every other time, and that face keeps its own (then larger) estimate: on the safe side.
+constexpr double kFormErrorFalseAlarm = 0.01;
+// The pool's degrees of freedom from which it is preferred to the NURBS-fitted faces' estimate: its σ is then
+// within 10 % (1 / √(2ν), one standard deviation).
+constexpr double kMinPooledDegrees = 50.0;
+// Leaving a face out lowers the pooled noise, which may show another face's form error: at most this many rounds.
+constexpr int kMaxPoolingRounds = 4;
+
 // The scale is not taken below this (mm): on exact data the residuals are rounding, and every point would stand out.
 constexpr double kScaleFloor = 1e-4;
 
@@ -195,6 +205,47 @@ Vector3 element_normal(const ElementFaceFit& e, const Point3& x, const Vector3& 
 double element_noise(const ElementFaceFit& e) {
   if (e.used <= e.parameters) return std::numeric_limits<double>::infinity();
   return e.rms * std::sqrt(static_cast<double>(e.used) / static_cast<double>(e.used - e.parameters));
+}
+
+ElementNoise element_face_noise(std::span<const ElementFaceFit* const> faces, std::optional<double> fitted_noise) {
+  const double none = std::numeric_limits<double>::infinity();
+  auto degrees = [](const ElementFaceFit& e) { return static_cast<double>(e.used - e.parameters); };
+  auto rss = [](const ElementFaceFit& e) { return e.rms * e.rms * static_cast<double>(e.used); };
+  std::vector<char> pooled(faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) pooled[i] = faces[i]->used > faces[i]->parameters;
+  double sum = 0.0, dof = 0.0;
+  for (int round = 0;; ++round) {
+    sum = 0.0;
+    dof = 0.0;
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      if (!pooled[i]) continue;
+      sum += rss(*faces[i]);
+      dof += degrees(*faces[i]);
+    }
+    if (!(dof > 0.0) || !(sum > 0.0) || round == kMaxPoolingRounds) break;
+    const double variance = sum / dof;
+    auto explained = [&](const ElementFaceFit& e) {
+      return rss(e) / variance <= geometry::chi2_upper_quantile(degrees(e), kFormErrorFalseAlarm);
+    };
+    bool changed = false;
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      if (pooled[i] && !explained(*faces[i])) {
+        pooled[i] = 0;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  // Exact data: the residuals are rounding, and u is not claimed below what a CMM resolves.
+  ElementNoise out{.pooled = dof > 0.0 ? std::max(std::sqrt(sum / dof), kScaleFloor) : none, .degrees = dof};
+  out.shared = dof >= kMinPooledDegrees || !fitted_noise ? out.pooled : *fitted_noise;
+  const double shared = out.shared;
+  out.face.assign(faces.size(), shared);
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const double own = element_noise(*faces[i]);
+    if (!pooled[i] && std::isfinite(own)) out.face[i] = std::isfinite(shared) ? std::max(own, shared) : own;
+  }
+  return out;
 }
 
 }  // namespace probecomp::compensation::detail

@@ -35,4 +35,19 @@ namespace probecomp::compensation::detail {
 // share of the degrees of freedom given back (√(n / (n − k))); infinity with no degree of freedom left.
 [[nodiscard]] double element_noise(const ElementFaceFit& e);
 
+// The noise along the normal that the rows of faces fitted as their elements take as u (mm; infinity where nothing
+// tells it). The same probe on the same machine measured them all: their residuals are pooled (Σ rss / Σ (n − k)),
+// and so fixed by all their degrees of freedom, where one face's 5–37 leave its own estimate a fifth off or more. A
+// face whose own residuals that noise does not explain (χ² test) holds form error its element does not follow: it
+// is left out of the pool and keeps its own, larger, estimate. With fewer than kMinPooledDegrees in the pool,
+// `fitted_noise` (the NURBS-fitted faces' median estimate, from more points) stands in where there is one.
+struct ElementNoise {
+  std::vector<double> face;  // per face, in the order given
+  double pooled = 0.0;       // the pool's (infinity without a degree of freedom)
+  double degrees = 0.0;      // its degrees of freedom
+  double shared = 0.0;       // the part's noise, which the faces in the pool take: the pool, or `fitted_noise`
+};
+[[nodiscard]] ElementNoise element_face_noise(std::span<const ElementFaceFit* const> faces,
+                                              std::optional<double> fitted_noise);
+
 }  // namespace probecomp::compensation::detail

@@ -17,6 +17,7 @@
 #include "probecomp/compensation/outliers.hpp"
 #include "probecomp/geometry/neighbours.hpp"
 #include "probecomp/geometry/parallel.hpp"
+#include "probecomp/geometry/statistics.hpp"
 #include "probecomp/geometry/stopwatch.hpp"
 #include "probecomp/nurbs/degree_elevation.hpp"
 
@@ -326,8 +327,6 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
           rep.fitted_as = ff.element->kind;
           for (std::size_t i = 0; i < members.size(); ++i) ff.trusted[i] = !left_out[position[i]];
           rep.rms = ff.element->rms;
-          const double noise = detail::element_noise(*ff.element);
-          if (std::isfinite(noise)) rep.noise_sigma = noise;
           rep.stop_reason = std::string("fitted as a ") + cad::to_string(ff.element->kind) + ": " + too_few +
                             "; " + std::to_string(ff.element->used) + " points used, rms " + mm(ff.element->rms) +
                             (ff.element->held > 0 ? ", " + std::to_string(ff.element->held) +
@@ -340,6 +339,27 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     }
     done += members.size();
     if (progress) progress(static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(raw.size(), 1)));
+  }
+  // The noise of the rows on element faces, from all of them at once (element_faces.hpp).
+  {
+    std::vector<ElementFaceFit*> elements;
+    std::vector<FaceReport*> reports;
+    std::vector<double> fitted;
+    for (auto& [f, ff] : by_face) {
+      if (ff.element) {
+        elements.push_back(&*ff.element);
+        reports.push_back(&ff.report);
+      }
+      if (ff.report.fitted) fitted.push_back(ff.fit->noise_sigma);
+    }
+    std::optional<double> fitted_noise;
+    if (!fitted.empty()) fitted_noise = geometry::median_in_place(fitted);
+    const detail::ElementNoise noise = detail::element_face_noise(elements, fitted_noise);
+    for (std::size_t i = 0; i < elements.size(); ++i) {
+      elements[i]->noise = noise.face[i];
+      if (std::isfinite(noise.face[i])) reports[i]->noise_sigma = noise.face[i];
+    }
+    out.noise_sigma = noise.shared;
   }
   out.faces.reserve(by_face.size());
   for (auto& [f, ff] : by_face) out.faces.push_back(std::move(ff));

@@ -62,20 +62,6 @@ constexpr double kOwnResidualSigmas = 3.0;
 // Half-width, in decades, of the smoothing search after a parameter correction (see fit_surface).
 constexpr double kCorrectionBracket = 0.75;
 
-// The upper quantile z with P(N(0,1) > z) = alpha (Abramowitz and Stegun 26.2.23, error below 4.5e-4).
-double normal_upper_quantile(double alpha) {
-  const double t = std::sqrt(-2.0 * std::log(alpha));
-  return t - (2.515517 + 0.802853 * t + 0.010328 * t * t) / (1.0 + 1.432788 * t + 0.189269 * t * t + 0.001308 * t * t * t);
-}
-
-// The χ² quantile with n degrees of freedom exceeded with probability alpha (Wilson–Hilferty: (χ²/n)^(1/3) is
-// nearly normal with mean 1 − 2/(9n) and variance 2/(9n); good to a few per cent from n = 2).
-double chi2_upper_quantile(double n, double alpha) {
-  const double h = 2.0 / (9.0 * n);
-  const double c = 1.0 - h + normal_upper_quantile(alpha) * std::sqrt(h);
-  return n * c * c * c;
-}
-
 // The span index of t among the breakpoints (the last span holds the domain's end).
 int span_of(const std::vector<double>& breaks, double t) {
   const auto it = std::upper_bound(breaks.begin(), breaks.end(), t);
@@ -310,7 +296,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
           }
           const double mean = n.sum_r / n.count;
           double b2 = std::max(0.0, mean * mean - sigma * sigma * n.sum_free / (static_cast<double>(n.count) * n.count));
-          if (n.chi2 > chi2_upper_quantile(n.count, kBiasSignificance)) {
+          if (n.chi2 > geometry::chi2_upper_quantile(n.count, kBiasSignificance)) {
             b2 = std::max(b2, sigma * sigma * (n.chi2 / n.count - 1.0));
           }
           // Never below the noise floor: the fit does not claim the surface to better than what a CMM resolves.
@@ -349,10 +335,10 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
         // the neighbourhood's forty points do. The pooled test flags the spans of the neighbourhood whose own
         // residuals carry the excess (mean square above σ²).
         if (count[s] == 0) continue;
-        bool unexplained = chi2[s] > chi2_upper_quantile(count[s], alpha);
+        bool unexplained = chi2[s] > geometry::chi2_upper_quantile(count[s], alpha);
         if (!unexplained && chi2[s] > count[s]) {
           const Pooled n = pooled(a, b);
-          unexplained = n.chi2 > chi2_upper_quantile(n.count, alpha);
+          unexplained = n.chi2 > geometry::chi2_upper_quantile(n.count, alpha);
         }
         if (!unexplained) continue;
         ++result.spans_above_noise;

@@ -115,4 +115,17 @@ double robust_scale_in_place(std::span<double> residuals, double min_scale) {
   return std::max(kMadToSigma * upper_median_in_place(residuals), min_scale);
 }
 
+double normal_upper_quantile(double alpha) {
+  const double t = std::sqrt(-2.0 * std::log(alpha));
+  const double numerator = 2.515517 + 0.802853 * t + 0.010328 * t * t;
+  const double denominator = 1.0 + 1.432788 * t + 0.189269 * t * t + 0.001308 * t * t * t;
+  return t - numerator / denominator;
+}
+
+double chi2_upper_quantile(double n, double alpha) {
+  const double h = 2.0 / (9.0 * n);
+  const double c = 1.0 - h + normal_upper_quantile(alpha) * std::sqrt(h);
+  return n * c * c * c;
+}
+
 }  // namespace probecomp::geometry

@@ -14,6 +14,7 @@
 #include "probecomp/cad/analytic.hpp"
 #include "probecomp/cad/locator.hpp"
 #include "probecomp/cad/model.hpp"
+#include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/simulation/measure.hpp"
 #include "probecomp/studies/comparison.hpp"
 #include "support/data_files.hpp"
@@ -183,6 +184,67 @@ TEST(ElementFaces, SparseTouchesOnConesAndToriAreFittedAsThoseAndOk) {
   EXPECT_GE(rows.covered, 0.9 * rows.ok);
   EXPECT_LT(rows.mean_u(), 0.005);
   EXPECT_EQ(elsewhere_ok, 0);
+}
+
+// The same probe measured every face: the rows on faces fitted as their elements take the noise pooled over them all
+// (Σ rss / Σ (n − k), compensation/element_faces.hpp), not each face's own estimate from its 12–20 points (5–17
+// degrees of freedom: a fifth off or more). A face whose points hold form error its element does not follow (here a
+// ripple of 6 µm added to one plane's centres) is left out of the pool and keeps its own, larger, estimate.
+TEST(ElementFaces, TheirNoiseIsPooledOverThemAndAFaceWithFormErrorKeepsItsOwn) {
+  const cad::Model part = cad::read_model(test::kCadDir / "nist_stc_06_asme1_ap242-e3.stp");
+  std::mt19937_64 rng(31);
+  const SparsePlan planned = plan_faces_of_kinds(
+      part, {{cad::ElementaryKind::Plane, 8, 16}, {cad::ElementaryKind::Cylinder, 6, 14}}, 3.0, rng);
+  const int rippled = planned.faces.front();
+  ASSERT_EQ(part.faces[static_cast<std::size_t>(rippled)].analytic->surface().kind, cad::ElementaryKind::Plane);
+  constexpr double kSigma = 0.002, kRipple = 0.006;  // mm
+  const geometry::RigidTransform placement(Eigen::Translation3d(0.2, -0.1, 0.15) *
+                                           Eigen::AngleAxisd(0.008, Vector3(0.3, 1, 0.6).normalized()));
+  const cad::Model placed = simulation::actual_model(part, {}, placement);
+  std::vector<simulation::ProgrammedPoint> followed = planned.plan;
+  for (simulation::ProgrammedPoint& p : followed) {
+    p.point = placement * p.point;
+    p.normal = placement.linear() * p.normal;
+  }
+  for (const std::uint64_t seed : {1u, 2u, 3u}) {
+    SCOPED_TRACE(seed);
+    const std::vector<simulation::Touch> touches = simulation::simulate_touches(
+        cad::ModelLocator(placed), followed, {.probe_radius = 1.0, .noise_sigma = kSigma, .seed = seed});
+    std::vector<Point3> centres;
+    std::vector<Vector3> normals;
+    for (std::size_t i = 0; i < touches.size(); ++i) {
+      if (touches[i].status == simulation::Touch::Status::Missed) continue;
+      Point3 c = touches[i].measured;
+      // Form error across the plane: a ripple of 10 mm wavelength along its points' first coordinate.
+      if (planned.plan[i].face == rippled) {
+        c += kRipple * std::sin(2.0 * M_PI * planned.plan[i].point.x() / 10.0) * followed[i].normal;
+      }
+      centres.push_back(c);
+      normals.push_back(followed[i].normal);
+    }
+    CompensateOptions options;
+    options.probe_radius = 1.0;
+    const CompensationResult result = compensate(part, centres, normals, options);
+    std::vector<double> pooled;
+    double own = 0.0;
+    for (const FaceReport& f : result.faces) {
+      if (!f.fitted_as) continue;
+      if (f.face == rippled) {
+        own = f.noise_sigma;
+      } else {
+        pooled.push_back(f.noise_sigma);
+      }
+    }
+    ASSERT_GE(pooled.size(), 10u);
+    const auto [low, high] = std::minmax_element(pooled.begin(), pooled.end());
+    std::printf("seed %llu: %zu faces share %.3f um (to %.3f); the rippled plane's own %.3f um\n",
+                static_cast<unsigned long long>(seed), pooled.size(), *low * 1e3, *high * 1e3, own * 1e3);
+    EXPECT_EQ(*low, *high) << "one noise for every face consistent with it";
+    // About 200 degrees of freedom: σ within 5 % (one standard deviation); 15 % is three.
+    EXPECT_NEAR(*low, kSigma, 0.15 * kSigma);
+    // Its residuals hold the ripple's 6/√2 µm rms with the noise: about 4.7 µm.
+    EXPECT_GT(own, 0.0035);
+  }
 }
 
 }  // namespace

@@ -222,6 +222,9 @@ struct ElementFaceFit {
   int parameters = 0;               // fitted: 3 plane, 4 sphere, 5 cylinder, 6 cone, 7 torus, less `held`
   int held = 0;                     // cone, torus: combinations of its parameters held at the nominal's, which the
                                     // points fix too poorly (fitting::HoldPoorlyFixed)
+  // The noise along the normal its rows take as u, mm: pooled over the part's element faces unless its own residuals
+  // show more (compensation/element_faces.hpp); infinity where nothing tells it.
+  double noise = std::numeric_limits<double>::infinity();
 };
 
 struct FaceFit {
@@ -247,6 +250,10 @@ struct FitResult {
   std::vector<FaceFit> faces;
   // Per input point: the second face (position) its tip touched within the contact tolerance, or −1.
   std::vector<int> second_contact;
+  // The centres' noise along the normal over the part, mm: the faces fitted as their elements pooled, else (too few
+  // degrees of freedom there) the NURBS-fitted faces' median estimate (compensation/element_faces.hpp); infinity
+  // when no face was fitted.
+  double noise_sigma = std::numeric_limits<double>::infinity();
   double seconds = 0.0;
 };
 

@@ -23,4 +23,12 @@ inline constexpr double kMadToSigma = 1.4826;
 // every ICP step.
 [[nodiscard]] double robust_scale_in_place(std::span<double> residuals, double min_scale);
 
+// The upper quantile z of the standard normal with P(N(0,1) > z) = alpha, 0 < alpha ≤ 0.5 (Abramowitz and Stegun
+// 26.2.23, error below 4.5e-4).
+[[nodiscard]] double normal_upper_quantile(double alpha);
+
+// The χ² quantile with n degrees of freedom exceeded with probability alpha (Wilson–Hilferty: (χ²/n)^(1/3) is
+// nearly normal with mean 1 − 2/(9n) and variance 2/(9n); good to a few per cent from n = 2).
+[[nodiscard]] double chi2_upper_quantile(double n, double alpha);
+
 }  // namespace probecomp::geometry
