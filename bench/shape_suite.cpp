@@ -1,13 +1,16 @@
 // The shape suite of issue 48, scored: a command that prints its own figures, not a timed benchmark.
 //   probecomp_shape_suite [--sigma S] [--case NAME[,NAME…]] [--draw N [--first SEED]] [--no-reference]
-//                         [--plain-reference] [--regions]
+//                         [--plain-reference] [--regions] [--stops] [--oracle]
 // Each case of simulation::shape_suite() (or N cases drawn at random from its families, seeds FIRST, FIRST+1, …)
 // is simulated, compensated by the CAD method and scored against the actual part: std, mean and largest error
 // (µm, ok rows), the rows flagged, ±2u coverage overall and in the worst of 6 × 6 regions, the fitted centre
 // surface's rms distance from the true centres (what `probecomp fit` writes), and the same std for the reference
 // smoother (tests/support/reference_smoother.hpp, a P-spline with GCV written apart from the product's fit) on the
 // same points with the same registration, and the ratio of the two. A summary gives the median and worst of each.
-// --sigma replaces every case's noise (mm).
+// --sigma replaces every case's noise (mm). --stops prints where each face's refinement stopped and why; --oracle
+// fits each case again with its smoothing λ fixed at the chosen one and ± 0.5, 1 and 1.5 decades from it (θ still
+// chosen) and prints the std at each: whether cross-validation over- or under-smooths there (the suite knows the truth; the
+// product does not).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -51,7 +54,7 @@ int main(int argc, char** argv) {
   double sigma = -1.0;
   int draw = 0;
   std::uint64_t first = 1;
-  bool reference = true, regions = false, plain_reference = false, stops = false;
+  bool reference = true, regions = false, plain_reference = false, stops = false, oracle = false;
   std::vector<std::string> only;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
@@ -83,8 +86,10 @@ int main(int argc, char** argv) {
       regions = true;
     } else if (arg == "--stops") {
       stops = true;
+    } else if (arg == "--oracle") {
+      oracle = true;
     } else {
-      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops]\n",
+      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle]\n",
                    argv[0]);
       return 2;
     }
@@ -137,6 +142,24 @@ int main(int argc, char** argv) {
           std::printf("    face %d: %d points, %d control points, %d rounds, %d fits: %s\n", f.face, f.points,
                       f.control_points, f.rounds, f.fits, f.stop_reason.c_str());
         }
+      }
+      if (oracle && !s.cad.faces.empty() && s.cad.faces.front().fitted) {
+        // The std against the smoothing, the face's chosen λ (relative, log10) in the middle. Fixed, λ holds in every
+        // round of refinement and every refit, not only the last fit where it was chosen.
+        const double chosen = s.cad.faces.front().log10_smoothing;
+        std::printf("    oracle: chosen log10 lambda %+.2f (std %.3f); fixed at it", chosen, r.std);
+        double best = r.std, best_offset = std::nan("");
+        for (const double offset : {-1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5}) {
+          compensation::CompensateOptions fixed;
+          fixed.fit.surface.fit.log10_smoothing = chosen + offset;
+          const double std_um = studies::run_shape_case(c, fixed).cad_summary.std * 1e3;
+          std::printf(" %+.1f: %.3f", offset, std_um);
+          if (std_um < best) {
+            best = std_um;
+            best_offset = offset;
+          }
+        }
+        std::printf(" | best %+.1f at %.3f (%.0f %% of the chosen's)\n", best_offset, best, 100.0 * best / r.std);
       }
       if (regions) {
         std::array<double, 36> e2{}, u2{}, a2{};

@@ -15,7 +15,6 @@
 #include "cli/measurement_program.hpp"
 #include "probecomp/cad/plan.hpp"
 #include "probecomp/cad/model.hpp"
-#include "probecomp/cad/pmi.hpp"
 #include "probecomp/inspection/characteristics.hpp"
 #include "probecomp/compensation/conventional.hpp"
 #include "probecomp/compensation/pipeline.hpp"
@@ -299,21 +298,15 @@ int run_compensate(const CompensateArgs& a) {
   const Loaded l = load(a.cad, a.points, a.probe_radius, a.units, a.initial_transform, bar, a.qualification);
   // The characteristics are read before the run, so that a bad specification fails before it.
   inspection::Specification spec;
-  if (a.characteristics == "pmi") {
-    const cad::Pmi pmi = cad::read_pmi(a.cad, l.model);
-    for (const std::string& w : pmi.warnings) bar.print("probecomp: warning: " + a.cad + ": " + w);
-    int skipped = 0;
-    spec = inspection::from_pmi(pmi, skipped);
-    if (spec.characteristics.empty()) {
-      throw std::invalid_argument("--characteristics pmi: " + a.cad + " states no surface profile or flatness" +
-                                  (pmi.tolerances.empty() ? " (no semantic PMI: STEP AP242 carries it)" : ""));
+  if (!a.characteristics.empty()) {
+    inspection::LoadedSpecification loaded;
+    try {
+      loaded = inspection::load_specification(a.characteristics, l.model);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("--characteristics " + a.characteristics + ": " + e.what());
     }
-    if (skipped > 0) {
-      bar.print("probecomp: warning: " + std::to_string(skipped) + " of the file's tolerances are not surface profiles " +
-                "or flatness and are not evaluated");
-    }
-  } else if (!a.characteristics.empty()) {
-    spec = inspection::read_specification(a.characteristics, l.model);
+    for (const std::string& w : loaded.warnings) bar.print("probecomp: warning: " + w);
+    spec = std::move(loaded.spec);
   }
   const compensation::Method method = a.method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
   const compensation::CompensationResult r =

@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
@@ -215,6 +216,27 @@ Specification from_pmi(const cad::Pmi& pmi, int& skipped) {
     spec.characteristics.push_back(std::move(s));
   }
   return spec;
+}
+
+LoadedSpecification load_specification(const std::string& source, const cad::Model& model) {
+  LoadedSpecification out;
+  if (source != "pmi") {
+    out.spec = read_specification(source, model);
+    return out;
+  }
+  const cad::Pmi pmi = cad::read_pmi(model.path, model);
+  for (const std::string& w : pmi.warnings) out.warnings.push_back(model.path.string() + ": " + w);
+  int skipped = 0;
+  out.spec = from_pmi(pmi, skipped);
+  if (out.spec.characteristics.empty()) {
+    throw std::invalid_argument(model.path.string() + " states no surface profile or flatness" +
+                                (pmi.tolerances.empty() ? " (no semantic PMI: STEP AP242 carries it)" : ""));
+  }
+  if (skipped > 0) {
+    out.warnings.push_back(std::to_string(skipped) + " of the file's tolerances are not surface profiles or flatness and "
+                           "are not evaluated");
+  }
+  return out;
 }
 
 Inspection evaluate(const Specification& spec, const cad::Model& nominal, const compensation::CompensationResult& result) {

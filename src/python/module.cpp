@@ -15,7 +15,6 @@
 #include <vector>
 
 #include "probecomp/cad/model.hpp"
-#include "probecomp/cad/pmi.hpp"
 #include "probecomp/compensation/conventional.hpp"
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/probe/qualification_file.hpp"
@@ -107,11 +106,7 @@ struct Run {
 // As compensate --characteristics: a specification file, or "pmi" for the model's STEP file's own, judged on the
 // run's points.
 inspection::Specification specification(const cad::Model& model, const std::string& characteristics) {
-  if (characteristics == "pmi") {
-    int skipped = 0;
-    return inspection::from_pmi(cad::read_pmi(model.path, model), skipped);
-  }
-  return inspection::read_specification(characteristics, model);
+  return inspection::load_specification(characteristics, model).spec;
 }
 
 inspection::Inspection judge(const Run& r, const cad::Model& model, const std::string& characteristics) {

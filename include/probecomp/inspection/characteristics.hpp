@@ -48,6 +48,16 @@ struct Specification {
 // perpendicularities, ...) are not characteristics of this step and are counted in `skipped`.
 [[nodiscard]] Specification from_pmi(const cad::Pmi& pmi, int& skipped);
 
+// The characteristics `source` names (compensate --characteristics, Python's characteristics=): a specification file
+// (read_specification), or "pmi" for those the model's own STEP AP242 file states (from_pmi). `warnings` are the PMI
+// reader's, and how many of the file's tolerances this step does not evaluate. Throws InputError for a bad file, and
+// std::invalid_argument where "pmi" finds no surface profile or flatness to judge.
+struct LoadedSpecification {
+  Specification spec;
+  std::vector<std::string> warnings;
+};
+[[nodiscard]] LoadedSpecification load_specification(const std::string& source, const cad::Model& model);
+
 // The faces of every datum feature the specification defines (sorted, once each): what locates the part when the
 // best fit of all its points is doubtful (compensation::CompensateOptions::datum_faces).
 [[nodiscard]] std::vector<int> datum_faces(const Specification& spec);
