@@ -8,9 +8,8 @@
 // smoother (tests/support/reference_smoother.hpp, a P-spline with GCV written apart from the product's fit) on the
 // same points with the same registration, and the ratio of the two. A summary gives the median and worst of each.
 // --sigma replaces every case's noise (mm). --stops prints where each face's refinement stopped and why; --oracle
-// fits each case again with its smoothing λ fixed at the chosen one and ± 0.5, 1 and 1.5 decades from it (θ still
-// chosen) and prints the std at each: whether cross-validation over- or under-smooths there (the suite knows the truth; the
-// product does not).
+// fits each case again with every fit's cross-validated λ moved by ±0.25, 0.5 and 1 decade, and prints the std at
+// each: whether cross-validation over- or under-smooths there (the suite knows the truth; the product does not).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -144,22 +143,24 @@ int main(int argc, char** argv) {
         }
       }
       if (oracle && !s.cad.faces.empty() && s.cad.faces.front().fitted) {
-        // The std against the smoothing, the face's chosen λ (relative, log10) in the middle. Fixed, λ holds in every
-        // round of refinement and every refit, not only the last fit where it was chosen.
-        const double chosen = s.cad.faces.front().log10_smoothing;
-        std::printf("    oracle: chosen log10 lambda %+.2f (std %.3f); fixed at it", chosen, r.std);
-        double best = r.std, best_offset = std::nan("");
-        for (const double offset : {-1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5}) {
-          compensation::CompensateOptions fixed;
-          fixed.fit.surface.fit.log10_smoothing = chosen + offset;
-          const double std_um = studies::run_shape_case(c, fixed).cad_summary.std * 1e3;
-          std::printf(" %+.1f: %.3f", offset, std_um);
+        // The std against the smoothing: every fit's λ, as cross-validation chose it, moved by a fixed number of
+        // decades (PenalizedFitOptions::log10_smoothing_offset).
+        std::printf("    oracle: chosen log10 lambda %+.2f, std", s.cad.faces.front().log10_smoothing);
+        double best = r.std, best_offset = 0.0;
+        for (const double offset : {-1.0, -0.5, -0.25, 0.0, 0.25, 0.5, 1.0}) {
+          double std_um = r.std;
+          if (offset != 0.0) {
+            compensation::CompensateOptions moved;
+            moved.fit.surface.fit.log10_smoothing_offset = offset;
+            std_um = studies::run_shape_case(c, moved).cad_summary.std * 1e3;
+          }
+          std::printf(" %+.2f: %.3f", offset, std_um);
           if (std_um < best) {
             best = std_um;
             best_offset = offset;
           }
         }
-        std::printf(" | best %+.1f at %.3f (%.0f %% of the chosen's)\n", best_offset, best, 100.0 * best / r.std);
+        std::printf(" | best %+.2f at %.3f (%.0f %% of the chosen's)\n", best_offset, best, 100.0 * best / r.std);
       }
       if (regions) {
         std::array<double, 36> e2{}, u2{}, a2{};

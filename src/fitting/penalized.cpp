@@ -413,6 +413,7 @@ Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double 
 
 }  // namespace
 
+
 PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> points,
                                  std::span<const SurfaceParameter> params, std::span<const double> weights,
                                  const PenalizedFitOptions& options, std::span<const double> span_weights) {
@@ -533,6 +534,9 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
         if (t.cv_score < best.cv_score) best = std::move(t);
       }
     }
+  }
+  if (options.log10_smoothing_offset != 0.0 && !options.log10_smoothing && best.ok) {
+    best = run(best.log10_smoothing + options.log10_smoothing_offset, best.log10_anisotropy);
   }
   result.evaluations = evaluations;
   if (!best.ok) {

@@ -61,6 +61,9 @@ struct PenalizedFitOptions {
   bool anisotropic = true;
   std::optional<double> log10_anisotropy;
   double max_log10_anisotropy = 2.0;
+  // Decades added to the λ cross-validation chooses, for studies of that choice against the truth (shape_suite
+  // --oracle); 0 in use.
+  double log10_smoothing_offset = 0.0;
 };
 
 struct PenalizedFitResult {
