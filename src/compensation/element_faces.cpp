@@ -131,6 +131,13 @@ bool like_nominal(const ElementFaceFit& e, const ElementFaceFit& nominal) {
   }
 }
 
+// A face's own noise along the normal: its residuals' rms with the element's parameters' share of the degrees of
+// freedom given back (√(n / (n − k))); infinity with no degree of freedom left.
+double element_noise(const ElementFaceFit& e) {
+  if (e.used <= e.parameters) return std::numeric_limits<double>::infinity();
+  return e.rms * std::sqrt(static_cast<double>(e.used) / static_cast<double>(e.used - e.parameters));
+}
+
 }  // namespace
 
 std::optional<ElementFaceFit> fit_element_face(const cad::Face& face, std::span<const Point3> centres,
@@ -202,11 +209,6 @@ Vector3 element_normal(const ElementFaceFit& e, const Point3& x, const Vector3& 
   return n.dot(towards) < 0.0 ? Vector3(-n) : n;
 }
 
-double element_noise(const ElementFaceFit& e) {
-  if (e.used <= e.parameters) return std::numeric_limits<double>::infinity();
-  return e.rms * std::sqrt(static_cast<double>(e.used) / static_cast<double>(e.used - e.parameters));
-}
-
 ElementNoise element_face_noise(std::span<const ElementFaceFit* const> faces, std::optional<double> fitted_noise) {
   const double none = std::numeric_limits<double>::infinity();
   auto degrees = [](const ElementFaceFit& e) { return static_cast<double>(e.used - e.parameters); };
@@ -237,7 +239,7 @@ ElementNoise element_face_noise(std::span<const ElementFaceFit* const> faces, st
     if (!changed) break;
   }
   // Exact data: the residuals are rounding, and u is not claimed below what a CMM resolves.
-  ElementNoise out{.pooled = dof > 0.0 ? std::max(std::sqrt(sum / dof), kScaleFloor) : none, .degrees = dof};
+  ElementNoise out{.pooled = dof > 0.0 ? std::max(std::sqrt(sum / dof), kScaleFloor) : none};
   out.shared = dof >= kMinPooledDegrees || !fitted_noise ? out.pooled : *fitted_noise;
   const double shared = out.shared;
   out.face.assign(faces.size(), shared);

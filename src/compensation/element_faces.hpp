@@ -31,20 +31,16 @@ namespace probecomp::compensation::detail {
 // The element's unit normal at (or nearest) x, pointing as `towards` does (the side the tip was on).
 [[nodiscard]] Vector3 element_normal(const ElementFaceFit& e, const Point3& x, const Vector3& towards);
 
-// A point's noise along the normal the element's residuals show: their rms with the element's parameters'
-// share of the degrees of freedom given back (√(n / (n − k))); infinity with no degree of freedom left.
-[[nodiscard]] double element_noise(const ElementFaceFit& e);
-
 // The noise along the normal that the rows of faces fitted as their elements take as u (mm; infinity where nothing
 // tells it). The same probe on the same machine measured them all: their residuals are pooled (Σ rss / Σ (n − k)),
 // and so fixed by all their degrees of freedom, where one face's 5–37 leave its own estimate a fifth off or more. A
 // face whose own residuals that noise does not explain (χ² test) holds form error its element does not follow: it
-// is left out of the pool and keeps its own, larger, estimate. With fewer than kMinPooledDegrees in the pool,
+// is left out of the pool and keeps its own, larger, estimate (its rms with the element's parameters' share of the
+// degrees of freedom given back, √(n / (n − k))). With fewer than kMinPooledDegrees in the pool,
 // `fitted_noise` (the NURBS-fitted faces' median estimate, from more points) stands in where there is one.
 struct ElementNoise {
   std::vector<double> face;  // per face, in the order given
   double pooled = 0.0;       // the pool's (infinity without a degree of freedom)
-  double degrees = 0.0;      // its degrees of freedom
   double shared = 0.0;       // the part's noise, which the faces in the pool take: the pool, or `fitted_noise`
 };
 [[nodiscard]] ElementNoise element_face_noise(std::span<const ElementFaceFit* const> faces,

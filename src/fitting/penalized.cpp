@@ -413,7 +413,6 @@ Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double 
 
 }  // namespace
 
-
 PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> points,
                                  std::span<const SurfaceParameter> params, std::span<const double> weights,
                                  const PenalizedFitOptions& options, std::span<const double> span_weights) {
