@@ -362,13 +362,15 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     // than the face on average has its penalty lowered k^roughness_power times, so that one λ does not flatten a
     // narrow dent to suit the broad shape around it.
     bool lowered = false;
+    const double floor =
+        result.noise_sigma <= options.noise_floor ? options.min_span_weight_noise_free : options.min_span_weight;
     {
       double mean = 0.0;
       for (double e : fit.span_roughness) mean += e;
       mean /= static_cast<double>(std::max<std::size_t>(fit.span_roughness.size(), 1));
       for (std::size_t s = 0; s < nsu * nsv && mean > 0.0; ++s) {
-        const double target = std::clamp(std::pow(mean / std::max(fit.span_roughness[s], 1e-300), options.roughness_power),
-                                         options.min_span_weight, 1.0);
+        const double target =
+            std::clamp(std::pow(mean / std::max(fit.span_roughness[s], 1e-300), options.roughness_power), floor, 1.0);
         if (target < 0.5 * span_weight[s]) {
           span_weight[s] = target;
           lowered = true;
@@ -376,8 +378,8 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       }
     }
     for (std::size_t s = 0; s < nsu * nsv; ++s) {
-      if (!span_flag[s] || span_weight[s] <= options.min_span_weight) continue;
-      span_weight[s] = std::max(span_weight[s] * 0.1, options.min_span_weight);
+      if (!span_flag[s] || span_weight[s] <= floor) continue;
+      span_weight[s] = std::max(span_weight[s] * 0.1, floor);
       lowered = true;
     }
     std::vector<double> xu = flagged_span_midpoints(bu, flag_u);

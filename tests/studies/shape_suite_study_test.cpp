@@ -9,6 +9,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <tuple>
 
 #include "probecomp/compensation/pipeline.hpp"
 #include "probecomp/error.hpp"
@@ -47,6 +48,32 @@ TEST(ShapeSuite, ScanLinesWithoutNoiseStateTheirErrorInU) {
   EXPECT_LE(worst, 3.0);
   EXPECT_TRUE(std::any_of(r.cad.warnings.begin(), r.cad.warnings.end(),
                           [](const std::string& w) { return w.find("lie along lines") != std::string::npos; }));
+}
+
+// The same lines at the suite's 7 000 points (S13; S29 across a 0.3 mm crease). Exact data leave every knot span the
+// fit misses by a tenth of a micrometre unexplained, and the spans' penalty had gone down to a millionth: between the
+// lines nothing held the fit, it rang there, and the contacts, offset along normals that come from across the lines,
+// were off by S13 std 4.65 µm (largest 142 µm), S29 49.4 µm (550 µm). The penalty of a span on lines without noise
+// is now kept from a hundredth (compensation/face_fits.cpp): measured 0.33 µm (9.2) and 2.35 µm (45.6). S29's
+// worst row is 4.2 u before and 4.4 u after (its crease: 0.3 mm over 1 mm between lines 4 mm apart): not yet
+// within 3 u.
+TEST(ShapeSuite, ScanLinesWithoutNoiseDoNotRingBetweenTheLines) {
+  if (test::kLight) GTEST_SKIP() << "ScanLinesWithoutNoiseStateTheirErrorInU runs the same code at 3 000 points";
+  for (const auto& [name, std_bound, max_bound, u_bound] :
+       {std::tuple{"S13", 0.001, 0.020, 3.0}, std::tuple{"S29", 0.005, 0.100, 5.0}}) {
+    SCOPED_TRACE(name);
+    const ShapeCaseResult r = run_shape_case(suite_case(name));
+    double worst = 0.0;
+    for (std::size_t k = 0; k < r.cad.points.size(); ++k) {
+      if (r.cad.points[k].status != compensation::PointStatus::Ok || !std::isfinite(r.cad_error[k])) continue;
+      worst = std::max(worst, std::abs(r.cad_error[k]) / r.cad.points[k].uncertainty);
+    }
+    std::printf("%s: std %.2f um, largest %.1f um, worst error %.2f u\n", name, r.cad_summary.std * 1e3,
+                r.cad_summary.max_abs() * 1e3, worst);
+    EXPECT_LT(r.cad_summary.std, std_bound);
+    EXPECT_LT(r.cad_summary.max_abs(), max_bound);
+    EXPECT_LE(worst, u_bound);
+  }
 }
 
 // Scan lines 4 mm apart at σ = 3 µm across a diagonal crease, a ripple and a saddle (S06). The smoothing chosen by

@@ -32,6 +32,9 @@ struct AdaptiveFitOptions {
   // An unexplained span's penalty weight is divided by 10 each round, down to this: a million times weaker than
   // the rest of the face still holds a span that no point fixes.
   double min_span_weight = 1e-6;
+  // ... and this floor where the noise estimate is at noise_floor (exact data), where every span the fit misses by
+  // more than a tenth of a micrometre is unexplained (compensation::fit_faces raises it on a scanning probe's lines).
+  double min_span_weight_noise_free = 1e-6;
   // The spatially adaptive penalty's exponent (see fit_surface). Measured on the free-form case with a 19° dent,
   // σ = 4.5 µm: largest error 13.1 µm at 0.5, 9.6–10.9 µm at 1, 9.8 µm at 2 with the flat panel's largest error
   // lowest at 2 (7.9 µm against 9.2–9.9 µm).
