@@ -214,7 +214,9 @@ ElementNoise element_face_noise(std::span<const ElementFaceFit* const> faces, st
   auto degrees = [](const ElementFaceFit& e) { return static_cast<double>(e.used - e.parameters); };
   auto rss = [](const ElementFaceFit& e) { return e.rms * e.rms * static_cast<double>(e.used); };
   std::vector<char> pooled(faces.size());
-  for (std::size_t i = 0; i < faces.size(); ++i) pooled[i] = faces[i]->used > faces[i]->parameters;
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    pooled[i] = faces[i]->used > faces[i]->parameters && std::isfinite(faces[i]->rms);
+  }
   double sum = 0.0, dof = 0.0;
   for (int round = 0;; ++round) {
     sum = 0.0;
@@ -225,9 +227,13 @@ ElementNoise element_face_noise(std::span<const ElementFaceFit* const> faces, st
       dof += degrees(*faces[i]);
     }
     if (!(dof > 0.0) || !(sum > 0.0) || round == kMaxPoolingRounds) break;
-    const double variance = sum / dof;
+    // Each face against the pool of the others, so that one large face's form error does not raise the noise it is
+    // tested against; never below the floor, where exact data's rounding differs from face to face.
     auto explained = [&](const ElementFaceFit& e) {
-      return rss(e) / variance <= geometry::chi2_upper_quantile(degrees(e), kFormErrorFalseAlarm);
+      const double others = dof - degrees(e);
+      const double variance = others > 0.0 ? (sum - rss(e)) / others : sum / dof;
+      return rss(e) / std::max(variance, kScaleFloor * kScaleFloor) <=
+             geometry::chi2_upper_quantile(degrees(e), kFormErrorFalseAlarm);
     };
     bool changed = false;
     for (std::size_t i = 0; i < faces.size(); ++i) {
@@ -240,7 +246,7 @@ ElementNoise element_face_noise(std::span<const ElementFaceFit* const> faces, st
   }
   // Exact data: the residuals are rounding, and u is not claimed below what a CMM resolves.
   ElementNoise out{.pooled = dof > 0.0 ? std::max(std::sqrt(sum / dof), kScaleFloor) : none};
-  out.shared = dof >= kMinPooledDegrees || !fitted_noise ? out.pooled : *fitted_noise;
+  out.shared = dof >= kMinPooledDegrees || !fitted_noise ? out.pooled : std::max(*fitted_noise, kScaleFloor);
   const double shared = out.shared;
   out.face.assign(faces.size(), shared);
   for (std::size_t i = 0; i < faces.size(); ++i) {

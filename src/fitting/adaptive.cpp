@@ -181,8 +181,10 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       PenalizedFitOptions near = fit_options;
       near.log10_anisotropy = fit.log10_anisotropy;
       if (!options.fit.log10_smoothing) {
-        near.min_log10_smoothing = std::max(fit_options.min_log10_smoothing, fit.log10_smoothing - kCorrectionBracket);
-        near.max_log10_smoothing = std::min(fit_options.max_log10_smoothing, fit.log10_smoothing + kCorrectionBracket);
+        // Around the λ cross-validation chose, not the one a study's offset moved it to (it is moved again).
+        const double chosen = fit.log10_smoothing - options.fit.log10_smoothing_offset;
+        near.min_log10_smoothing = std::max(fit_options.min_log10_smoothing, chosen - kCorrectionBracket);
+        near.max_log10_smoothing = std::min(fit_options.max_log10_smoothing, chosen + kCorrectionBracket);
       }
       fit = fit_penalized(target, points, t, weights, near, span_weight);
     }
@@ -364,6 +366,13 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     bool lowered = false;
     const double floor =
         result.noise_sigma <= options.noise_floor ? options.min_span_weight_noise_free : options.min_span_weight;
+    // (A span lowered further in a round whose noise estimate was above the floor comes back up to it.)
+    for (double& w : span_weight) {
+      if (w < floor) {
+        w = floor;
+        lowered = true;
+      }
+    }
     {
       double mean = 0.0;
       for (double e : fit.span_roughness) mean += e;

@@ -535,7 +535,10 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     }
   }
   if (options.log10_smoothing_offset != 0.0 && !options.log10_smoothing && best.ok) {
-    best = run(best.log10_smoothing + options.log10_smoothing_offset, best.log10_anisotropy);
+    const double moved = std::clamp(best.log10_smoothing + options.log10_smoothing_offset,
+                                    options.min_log10_smoothing, options.max_log10_smoothing);
+    Trial t = run(moved, best.log10_anisotropy);
+    if (t.ok) best = std::move(t);
   }
   result.evaluations = evaluations;
   if (!best.ok) {

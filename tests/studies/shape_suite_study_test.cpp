@@ -66,6 +66,7 @@ TEST(ShapeSuite, ScanLinesWithoutNoiseDoNotRingBetweenTheLines) {
     double worst = 0.0;
     for (std::size_t k = 0; k < r.cad.points.size(); ++k) {
       if (r.cad.points[k].status != compensation::PointStatus::Ok || !std::isfinite(r.cad_error[k])) continue;
+      ASSERT_TRUE(std::isfinite(r.cad.points[k].uncertainty) && r.cad.points[k].uncertainty > 0.0) << k;
       worst = std::max(worst, std::abs(r.cad_error[k]) / r.cad.points[k].uncertainty);
     }
     std::printf("%s: std %.2f um, largest %.1f um, worst error %.2f u\n", name, r.cad_summary.std * 1e3,

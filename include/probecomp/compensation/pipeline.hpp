@@ -222,8 +222,9 @@ struct ElementFaceFit {
   int parameters = 0;               // fitted: 3 plane, 4 sphere, 5 cylinder, 6 cone, 7 torus, less `held`
   int held = 0;                     // cone, torus: combinations of its parameters held at the nominal's, which the
                                     // points fix too poorly (fitting::HoldPoorlyFixed)
-  // The noise along the normal its rows take as u, mm: pooled over the part's element faces unless its own residuals
-  // show more (compensation/element_faces.hpp); infinity where nothing tells it.
+  // The noise along the normal its rows take as u, mm: pooled over the part's element faces (the NURBS-fitted faces'
+  // median where that pool has under 50 degrees of freedom) unless its own residuals show more
+  // (compensation/element_faces.hpp); infinity where nothing tells it.
   double noise = std::numeric_limits<double>::infinity();
 };
 
