@@ -175,7 +175,8 @@ def compensate(model, centres, probe_radius=None, normals=None, method="cad", *,
     styli           with qualification: each centre's stylus name (N str); None when the file qualifies one stylus
     characteristics optional specification as for judge() (a path, or "pmi"): where the best fit of all the points is
                     doubtful, its datum features' points locate the part alone, as `compensate --characteristics`
-                    does (stats["registration"]["located_by"] says which); judge the result with the same one
+                    does (stats["registration"]["located_by"] says which); its warnings (tolerances not evaluated,
+                    the PMI reader's) join the result's; judge the result with the same one
 
     Returns a CompensationResult (see its help). The work runs with the GIL released.
     Raises InputError (points or options the method cannot use), CadError, RegistrationError (the points could not

@@ -133,8 +133,14 @@ Run run_compensate(const cad::Model& model, const Array& centres, const Array& r
   }
   o.method = method == "conventional" ? compensation::Method::Conventional : compensation::Method::Cad;
   o.accept_doubtful_registration = accept_doubtful;
-  // As compensate --characteristics: the datum features locate a part whose best fit is doubtful.
-  if (!characteristics.empty()) o.datum_faces = inspection::datum_faces(specification(model, characteristics));
+  // As compensate --characteristics: the datum features locate a part whose best fit is doubtful, and the
+  // specification's warnings (a PMI reader's, tolerances not evaluated) join the run's.
+  std::vector<std::string> specification_warnings;
+  if (!characteristics.empty()) {
+    inspection::LoadedSpecification loaded = inspection::load_specification(characteristics, model);
+    o.datum_faces = inspection::datum_faces(loaded.spec);
+    specification_warnings = std::move(loaded.warnings);
+  }
   Run run;
   run.inputs.cad = model.path.string();
   run.inputs.points = points_name;
@@ -180,6 +186,7 @@ Run run_compensate(const cad::Model& model, const Array& centres, const Array& r
     py::gil_scoped_release unlocked;
     const geometry::Stopwatch clock;
     run.result = compensation::compensate(model, points, approach, o);
+    run.result.warnings.insert(run.result.warnings.end(), specification_warnings.begin(), specification_warnings.end());
     if (fit) {
       run.part_surfaces = compensation::fitted_part_surfaces(run.result);
       for (const compensation::FaceReport& f : run.result.faces) {

@@ -151,6 +151,17 @@ def test_the_demo_gives_the_clis_numbers(demo, work):
                              characteristics=work / "spec_bad.json")
 
 
+def test_the_files_own_pmi_passes_its_warnings_on_as_the_command_line_prints_them(work):
+    # FTC-06 (STEP AP242): 13 of its tolerances are not surface profiles or flatness. The command line warns so; a
+    # Python run given characteristics="pmi" has the same warning among its own.
+    ftc = os.path.join(CAD_DIR, "nist_ftc_06_asme1_ap242-e2.stp")
+    cli("simulate", "--cad", ftc, "--spacing", 10, "--probe-radius", 1, "--noise", 0.002, "--output-dir", work / "ftc")
+    raw = probecomp.read_points(work / "ftc" / "raw.csv")
+    res = probecomp.compensate(probecomp.CadModel(ftc), raw.points, 1.0, raw.normals, characteristics="pmi")
+    skipped = [w for w in res.warnings if "are not surface profiles or flatness and are not evaluated" in w]
+    assert skipped == ["13 of the file's tolerances are not surface profiles or flatness and are not evaluated"]
+
+
 def test_a_held_out_free_form_case_gives_the_clis_numbers_and_meets_the_truth(heldout, demo, work, capsys):
     out = work / "heldout_out.csv"
     cli("compensate", "--cad", demo / "nominal.igs", "--points", heldout / "raw.csv", "--probe-radius", 1,
