@@ -91,8 +91,9 @@ std::string fit_stop_reason(const fitting::AdaptiveFitResult& fit, const fitting
     case S::OK: return "every span's residuals are consistent with the noise estimate";
     case S::NoiseNotReached:
       return std::to_string(fit.spans_above_noise) + " span(s) still above the noise: " +
-             (fit.rounds >= options.max_rounds ? "the refinement rounds ran out"
-                                               : "the points support no more control points");
+             (fit.refinement_rejected         ? "more control points did not predict left-out points better"
+              : fit.rounds >= options.max_rounds ? "the refinement rounds ran out"
+                                                 : "the points support no more control points");
     case S::NotDone: return "the fit could not be set up (too few usable points for its control points)";
     case S::NumericalError: return "the fit's normal equations could not be solved";
   }

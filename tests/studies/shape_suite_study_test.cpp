@@ -77,6 +77,25 @@ TEST(ShapeSuite, ScanLinesWithoutNoiseDoNotRingBetweenTheLines) {
   }
 }
 
+// A misfit spread thin over a face inflates the residuals' spread, which every span is then measured against, so
+// no span stands out and the refinement stopped with the shape half followed and u blind to it. Two cases drawn
+// from the suite's families (draw_shape_case, seeds 207 and 410; σ = 4.5 µm, random points): a bulge 0.34 mm high
+// and 14 mm wide on the cylinder, no i,j,k (std 1.28 µm, ±2u held 59.6 % of the errors) and a 53 µm wave 17 mm long
+// in a band on the panel (1.87 µm, 72.5 %). Refined on trial where the residuals exceed σ on average, each trial kept
+// only if it predicts left-out points better (fitting/adaptive.cpp): 0.69 µm (88.0 %) and 1.19 µm (93.9 %).
+TEST(ShapeSuite, AMisfitThinOverTheFaceIsFollowedNotTakenForNoise) {
+  for (const auto& [seed, std_bound, coverage_bound] : {std::tuple{207, 0.0009, 0.85}, std::tuple{410, 0.0014, 0.90}}) {
+    const simulation::ShapeCase c = simulation::draw_shape_case(static_cast<std::uint64_t>(seed), 0.0045);
+    SCOPED_TRACE(c.name);
+    const ShapeCaseResult r = run_shape_case(c);
+    std::printf("draw %d: std %.2f um, largest %.1f um, coverage %.1f %% (worst region %.1f %%)\n", seed,
+                r.cad_summary.std * 1e3, r.cad_summary.max_abs() * 1e3, 100.0 * r.coverage_2u,
+                100.0 * r.worst_region_coverage_2u);
+    EXPECT_LT(r.cad_summary.std, std_bound);
+    EXPECT_GE(r.coverage_2u, coverage_bound);
+  }
+}
+
 // Scan lines 4 mm apart at σ = 3 µm across a diagonal crease, a ripple and a saddle (S06). The smoothing chosen by
 // leaving one point out followed each line and swung between them: std 18 µm, contacts up to 0.29 mm off. Chosen
 // by leaving a span's points out (measured at 2 500 points: std 1.62 µm, largest 10.1 µm; 0.86 and 4.9 µm at the

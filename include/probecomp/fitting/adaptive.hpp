@@ -3,7 +3,9 @@
 // the smoothing chosen by cross-validation (fitting/penalized.hpp), optionally correct the points' parameters by projecting
 // them on the fit, estimate the measurement noise robustly from the residuals, and insert knots in the spans
 // whose residuals the noise does not explain; repeat until every span is consistent with the noise, the data
-// can support no more control points, or the rounds run out.
+// can support no more control points, or the rounds run out. Where every span is consistent but the residuals'
+// spread is above the local noise estimate (a misfit thin over the face), refinement is tried, and each round
+// tried is kept only if it predicts left-out points better.
 
 #include <cstdint>
 #include <span>
@@ -78,6 +80,9 @@ struct AdaptiveFitResult {
   double max_residual = 0.0; // largest |residual| over points with weight > 0, mm
   double noise_sigma = 0.0;  // the measurement noise, mm (fitting/noise_estimate.hpp)
   int spans_above_noise = 0;
+  // NoiseNotReached because a further round of refinement predicted left-out points no better (a lower
+  // cross-validation score) and was undone.
+  bool refinement_rejected = false;
   double effective_dof = 0.0;    // tr H of the last fit (per coordinate)
   double log10_smoothing = 0.0;  // its smoothing, relative (PenalizedFitResult)
   // Per point: the fitted point's variance over σ² (PenalizedFitResult::variance_factor); w_k times it is the
