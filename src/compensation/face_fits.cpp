@@ -241,11 +241,13 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     normal_check.along_lines = sampled_along_lines(pts);
     // Nor is the energy made anisotropic there: a penalty that lets the fit bend freely across the lines lets it
     // ring between them (shape suite, S13 without noise: std 4.6 -> 31 um with it). For the same reason, on exact
-    // data a span's penalty is not lowered below kNoiseFreeLinesMinSpanWeight.
+    // data a span's penalty is not lowered below kNoiseFreeLinesMinSpanWeight; nor, with noise, is a span split
+    // between two lines.
     if (*normal_check.along_lines) {
       surface.fit.cross_validation = fitting::CrossValidation::LeaveSpanOut;
       surface.fit.anisotropic = false;
       surface.min_span_weight_noise_free = std::max(surface.min_span_weight_noise_free, kNoiseFreeLinesMinSpanWeight);
+      surface.split_only_where_points_either_side = true;
     }
     auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at) {
       in_fit.resize(pts.size());

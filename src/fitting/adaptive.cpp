@@ -252,6 +252,8 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     const std::size_t nsu = bu.size() - 1, nsv = bv.size() - 1;
     std::vector<double> chi2(nsu * nsv, 0.0), sum_r(nsu * nsv, 0.0), sum_free(nsu * nsv, 0.0);
     std::vector<int> count(nsu * nsv, 0);
+    // Of each span's points, how many lie below its middle in u and in v.
+    std::vector<int> below_u(nsu * nsv, 0), below_v(nsu * nsv, 0);
     // Each point's span in parallel; the sums in point order (the same whatever the thread count).
     std::vector<std::uint32_t> span(points.size());  // a face has far fewer than 2^32 spans
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096), [&](const auto& range) {
@@ -269,6 +271,9 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       sum_r[s] += result.residuals[k];
       sum_free[s] += std::max(1.0 - leverage(k), 0.0);
       ++count[s];
+      const std::size_t a = s / nsv, b = s % nsv;
+      below_u[s] += t[k].u < 0.5 * (bu[a] + bu[a + 1]);
+      below_v[s] += t[k].v < 0.5 * (bv[b] + bv[b + 1]);
     }
     // A span's χ² and count pooled with its (up to) eight neighbours'.
     struct Pooled {
@@ -354,8 +359,12 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
         ++result.spans_above_noise;
         span_flag[s] = 1;
         if (count[s] >= options.min_points_to_split) {
-          flag_u[a] = 1;
-          flag_v[b] = 1;
+          // (See AdaptiveFitOptions::split_only_where_points_either_side; not on exact data, which the penalty's
+          // floor holds between the lines, and whose creases between lines need the split: shape suite S29, its
+          // worst region's ±2u coverage 94.6 % with it, 66.4 % without.)
+          const bool any = !options.split_only_where_points_either_side || result.noise_sigma <= options.noise_floor;
+          if (any || std::min(below_u[s], count[s] - below_u[s]) > 0) flag_u[a] = 1;
+          if (any || std::min(below_v[s], count[s] - below_v[s]) > 0) flag_v[b] = 1;
         }
       }
     }
