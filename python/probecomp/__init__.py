@@ -95,7 +95,8 @@ class CompensationResult:
                          "pmi" for the surface profiles and flatnesses the model's STEP AP242 file states
 
         Returns a dict with the --json keys "characteristics" (name, type, faces, datums, tolerance, outside, points,
-        decision, and min, max, value, u or reason; mm) and, where frames were set up, "datums" and "alignment".
+        decision, and min, max, value, u, k or reason, and reason too when indeterminate; mm) and, where frames were
+        set up, "datums" and "alignment".
         The arrays of this result are not moved into an alignment frame; the command line's output is.
         Raises InputError for a bad specification file, CadError for a file whose PMI cannot be read.
         """

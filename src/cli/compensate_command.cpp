@@ -322,6 +322,7 @@ int run_compensate(const CompensateArgs& a) {
       std::snprintf(figures, sizeof figures, " (value %.4f mm, U %.4f mm, tolerance %.4f mm, %d points)", c.value, c.u,
                     c.spec.tolerance, c.points);
       line += figures;
+      if (c.decision == inspection::Decision::Indeterminate) line += ": " + c.reason;
     }
     bar.print(line);
   }

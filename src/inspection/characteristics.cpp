@@ -348,6 +348,23 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
       continue;
     }
     c.decision = outside_surely ? Decision::DoesNotConform : inside ? Decision::Conforms : Decision::Indeterminate;
+    if (c.decision == Decision::Indeterminate) {
+      // What holds it back, in one line: the value and its 2u describe the widest point, which may be well inside
+      // while a point of large u (a contact whose normal could not be confirmed: u up to r) crosses a limit.
+      const std::set<std::size_t> crossing(c.undecided.begin(), c.undecided.end());
+      const JudgedPoint* widest = nullptr;
+      for (const JudgedPoint& p : c.judged) {
+        if (crossing.contains(p.row) && (widest == nullptr || p.U > widest->U)) widest = &p;
+      }
+      char line[200];
+      if (widest != nullptr) {
+        std::snprintf(line, sizeof line, "%zu of its points' d +- U cross a limit of the zone; the largest U %.4f mm, row %zu",
+                      crossing.size(), widest->U, widest->row + 1);
+      } else {
+        std::snprintf(line, sizeof line, "a point's U is not finite");
+      }
+      c.reason = line;
+    }
     out.characteristics.push_back(std::move(c));
   }
   if (!spec.alignment.empty()) {

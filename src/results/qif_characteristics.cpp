@@ -275,7 +275,7 @@ void add_characteristics(std::string& xml, const inspection::Inspection& inspect
     const bool evaluated = c.decision != inspection::Decision::NotEvaluated;
     attributes(m, {{"probecomp:points", std::to_string(c.points)},
                    {"probecomp:k", evaluated ? io::fixed(c.coverage, 3) : std::string()},
-                   {"probecomp:reason", evaluated ? std::string() : c.reason}});
+                   {"probecomp:reason", c.reason}});
     m.append_child("Status").append_child("CharacteristicStatusEnum").text().set(status(c.decision));
     text(m, "CharacteristicItemId", item_id);
     if (evaluated) {

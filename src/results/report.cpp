@@ -278,7 +278,7 @@ void characteristics_section(std::ostream& h, const inspection::Inspection& in) 
       h << "<td></td><td></td><td></td><td></td>";
     }
     h << "<td" << mark << ">" << inspection::to_string(c.decision)
-      << (evaluated ? std::string() : ": " + xml_escape(c.reason)) << "</td></tr>\n";
+      << (c.reason.empty() ? std::string() : ": " + xml_escape(c.reason)) << "</td></tr>\n";
   }
   h << "</table>\n";
   if (in.datums.empty()) return;

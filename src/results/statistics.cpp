@@ -234,6 +234,7 @@ std::string statistics_json(const compensation::CompensationResult& r, const Run
         x["value"] = number(c.value);
         x["u"] = number(c.u);
         x["k"] = json_fixed(c.coverage, 3);
+        if (c.decision == inspection::Decision::Indeterminate) x["reason"] = c.reason;
       }
       list.push_back(x);
     }

@@ -88,6 +88,24 @@ TEST(Characteristics, AFlatnessIsTheTwistsHalfHeightAndItsDecisionFollowsTheZone
   EXPECT_EQ(evaluate(flatness(wide.value), m.nominal, m.result).characteristics.at(0).decision, Decision::Indeterminate);
 }
 
+// A point of large u (a contact whose normal the data could not confirm carries u up to r) holds the decision back
+// however well inside the others are; the value and its 2u are the widest point's and do not show it, so the reason
+// names how many points cross a limit, the largest U and its row (1-based, as the output's rows).
+TEST(Characteristics, AnIndeterminateDecisionSaysWhichPointsHoldItBack) {
+  Measured m = measure(0.04);
+  const std::size_t doubtful = 17;
+  m.result.points[doubtful].uncertainty = 1.0;  // r of a 2 mm stylus
+  const CharacteristicResult f = evaluate(flatness(0.03), m.nominal, m.result).characteristics.at(0);
+  ASSERT_EQ(f.decision, Decision::Indeterminate);
+  ASSERT_EQ(f.undecided.size(), 1u);
+  EXPECT_EQ(f.undecided.front(), doubtful);
+  EXPECT_LT(f.u, 0.01);  // the widest point's, not the doubtful one's
+  char expected[120];
+  std::snprintf(expected, sizeof expected, "1 of its points' d +- U cross a limit of the zone; the largest U %.4f mm, row %zu",
+                f.coverage * 1.0, doubtful + 1);
+  EXPECT_EQ(f.reason, expected);
+}
+
 // Each point as the flatness judged it: its deviation from the best-fitted plane is the closed form at its place.
 TEST(Characteristics, EachPointsDeviationIsTheClosedFormAtItsPlace) {
   constexpr double h = 0.04;

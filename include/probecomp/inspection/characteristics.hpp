@@ -83,7 +83,7 @@ struct CharacteristicResult {
   // k keeping all the points' intervals right together with 95 % probability (2 for a few points; 3.0 for 20).
   double coverage = 2.0;
   Decision decision = Decision::NotEvaluated;
-  std::string reason;    // why not evaluated
+  std::string reason;    // why not evaluated; or, when indeterminate, which points hold it back
   bool too_few_points = false;  // not evaluated for want of trusted points on its faces (more would decide it)
   std::vector<std::size_t> undecided;  // rows of the result whose d ± U crosses a limit of the zone: to measure again
   std::vector<JudgedPoint> judged;     // every point it used, by ascending row (24 bytes each)
