@@ -117,6 +117,17 @@ LocalPredictionNoise::LocalPredictionNoise(std::span<const Point3> points, std::
   }
 }
 
+double LocalPredictionNoise::neighbour_correlation(std::span<const double> residuals) const {
+  constexpr auto K = static_cast<std::size_t>(kNeighbours);
+  double cross = 0.0, own = 0.0;
+  for (std::size_t i = 0; i < tested_.size(); ++i) {
+    const double r = residuals[tested_[i]];
+    own += r * r;
+    for (std::size_t j = 0; j < K; ++j) cross += r * residuals[neighbour_[i * K + j]];
+  }
+  return own > 0.0 ? cross / (static_cast<double>(K) * own) : 0.0;
+}
+
 double LocalPredictionNoise::sigma(std::span<const double> residuals) const {
   if (tested_.empty()) return std::numeric_limits<double>::infinity();
   constexpr auto K = static_cast<std::size_t>(kNeighbours);

@@ -93,6 +93,22 @@ TEST(LocalPredictionNoise, IsNotMovedByAWave) {
   expect_sigma(Sampling::Random, 0.003, [](double x, double y) { return 0.02 * std::sin(2.0 * M_PI * (0.8 * x + 0.6 * y) / 12.0); });
 }
 
+// The correlation of neighbouring residuals: about 0 on independent noise (within 4 standard errors of about
+// 1/√(12·6000)), and positive where a misfit smooth over a neighbourhood remains: a wave of 12 mm at σ = 4.5 µm,
+// 2 µm high, holds 2²/2 / (2²/2 + 4.5²) = 0.090 of the variance, and neighbours within 2 mm (a sixth of its length)
+// share cos(2π·d/12) ≥ 0.5 of it: between 0.045 and 0.090.
+TEST(LocalPredictionNoise, NeighbouringResidualsCorrelateOnlyUnderASmoothMisfit) {
+  for (Sampling s : {Sampling::Grid, Sampling::Random}) {
+    SCOPED_TRACE(static_cast<int>(s));
+    const Field noise = make_field(s, 6000, 0.0045, 3, [](double, double) { return 0.0; });
+    EXPECT_NEAR(LocalPredictionNoise(noise.points, {}).neighbour_correlation(noise.residuals), 0.0, 4.0 / std::sqrt(12.0 * 6000));
+    const Field wave = make_field(s, 6000, 0.0045, 3, [](double x, double y) { return 0.002 * std::sin(2.0 * M_PI * (0.8 * x + 0.6 * y) / 12.0); });
+    const double rho = LocalPredictionNoise(wave.points, {}).neighbour_correlation(wave.residuals);
+    EXPECT_GT(rho, 0.045);
+    EXPECT_LT(rho, 0.090 + 4.0 / std::sqrt(12.0 * 6000));
+  }
+}
+
 // 3 % of the points 0.1–0.5 mm off: a minority the median ignores.
 TEST(LocalPredictionNoise, IgnoresAMinorityOfGrossErrors) {
   Field f = make_field(Sampling::Random, 6000, 0.003, 7, [](double, double) { return 0.0; });

@@ -29,6 +29,10 @@ class LocalPredictionNoise {
   // σ of the noise in `residuals` (one per point, in the order given at construction), mm; infinity where no
   // point has a usable neighbourhood.
   [[nodiscard]] double sigma(std::span<const double> residuals) const;
+  // The correlation of each tested point's residual with its kNeighbours nearest ones', Σ r_k r_j / (K Σ r_k²):
+  // about 0 (a little below: a fit's residuals repel) on noise alone, positive where a misfit smooth over
+  // several points remains.
+  [[nodiscard]] double neighbour_correlation(std::span<const double> residuals) const;
   // Points tested (those with a well-posed local quadratic).
   [[nodiscard]] std::size_t tested() const { return tested_.size(); }
 
