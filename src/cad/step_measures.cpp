@@ -1,6 +1,7 @@
 #include "step_measures.hpp"
 
 #include <cctype>
+#include <charconv>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -116,12 +117,16 @@ std::optional<double> number(std::string_view s) {
   return v;
 }
 
+// An instance name (#123) is an integer: parsed as one, so that a name of 66 digits is no reference (as a double
+// it was cast to long past its range: found by fuzz_cad_step).
 const std::string_view* referenced(const Instances& all, std::string_view ref) {
   ref = trimmed(ref);
   if (ref.size() < 2 || ref.front() != '#') return nullptr;
-  const auto id = number(ref.substr(1));
-  if (!id) return nullptr;
-  const auto it = all.find(static_cast<long>(*id));
+  const std::string_view digits = trimmed(ref.substr(1));
+  long id = 0;
+  const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), id);
+  if (error != std::errc() || end != digits.data() + digits.size()) return nullptr;
+  const auto it = all.find(id);
   return it == all.end() ? nullptr : &it->second;
 }
 
