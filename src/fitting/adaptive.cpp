@@ -181,12 +181,13 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   bool trying = false;
   std::optional<AdaptiveFitResult> kept;
   double kept_cv = std::numeric_limits<double>::infinity();
+  auto undone = [&](const PenalizedFitResult& fit) { return trying && (!fit.ok() || !(fit.cv_score < kept_cv)); };
   for (int round = 0;; ++round) {
     PenalizedFitResult fit = fit_penalized(target, points, t, weights, fit_options, span_weight);
     // A round tried (see below) whose fit predicts left-out points no better is undone: judged before the
     // parameter corrections (the points' parameters are those the kept fit was scored with), so that a refinement
-    // undone costs one fit, not three.
-    if (trying && (!fit.ok() || !(fit.cv_score < kept_cv))) return std::move(*kept);
+    // undone costs one fit, not three, and again after them.
+    if (undone(fit)) return std::move(*kept);
     for (int c = 0; c < options.parameter_corrections && fit.ok(); ++c) {
       t = correct_parameters(fit.surface, points, t);
       // The points moved along the surface by a fraction of their spacing: the smoothing is sought within
@@ -201,7 +202,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       }
       fit = fit_penalized(target, points, t, weights, near, span_weight);
     }
-    if (trying && (!fit.ok() || !(fit.cv_score < kept_cv))) return std::move(*kept);
+    if (undone(fit)) return std::move(*kept);
     if (!fit.ok()) {
       result.status = fit.status == PenalizedFitResult::Status::NotDone ? AdaptiveFitResult::Status::NotDone
                                                                         : AdaptiveFitResult::Status::NumericalError;
@@ -372,16 +373,13 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
         }
       }
     }
-    auto finish = [&](AdaptiveFitResult::Status status) {
-      result.status = status;
-      result.span_spread = span_spread(standardised, weights, span, nsu, nsv, result.noise_sigma);
-      return std::move(result);
+    auto complete = [&](AdaptiveFitResult& r, AdaptiveFitResult::Status status) {
+      r.status = status;
+      r.span_spread = span_spread(standardised, weights, span, nsu, nsv, r.noise_sigma);
     };
-    auto finished_copy = [&](AdaptiveFitResult::Status status) {
-      AdaptiveFitResult copy = result;
-      copy.status = status;
-      copy.span_spread = span_spread(standardised, weights, span, nsu, nsv, copy.noise_sigma);
-      return copy;
+    auto finish = [&](AdaptiveFitResult::Status status) {
+      complete(result, status);
+      return std::move(result);
     };
     // Every span is consistent with the noise estimate; but a misfit spread thin over the face (a wave over all
     // of it, a broad bulge) inflates the spread it is measured against, and the local prediction errors read a few
@@ -391,9 +389,9 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     // later one) is kept only if its cross-validation score is lower. Tried only where the residuals show such a
     // misfit: their spread exceeds those prediction errors despite their reading high, or neighbouring residuals
     // are correlated beyond chance (a fit's residuals repel on noise alone: −0.02 to −0.08 on the shape suite's
-    // final fits; D308, a 15 µm wave in a window, +0.015 over 7 000 points), so that a face showing none pays nothing for it (a trial undone on
-    // the benchmark's 10 000 points took 0.17 -> 0.57 s). Not on scan lines: leave-span-out scores of different
-    // knot spans are not comparable.
+    // final fits; D308, a 15 µm wave in a window, +0.015 over 7 000 points), so that a face showing none pays
+    // nothing for it (a trial undone on the benchmark's 10 000 points took 0.17 -> 0.57 s). Not on scan lines:
+    // leave-span-out scores of different knot spans are not comparable.
     bool trial = false;
     if (result.spans_above_noise == 0 && round < options.max_rounds && result.noise_sigma > options.noise_floor &&
         options.fit.cross_validation == CrossValidation::LeaveOneOut &&
@@ -419,7 +417,8 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     if (result.spans_above_noise == 0 && !trial) return finish(AdaptiveFitResult::Status::OK);
     if (round == options.max_rounds) return finish(AdaptiveFitResult::Status::NoiseNotReached);
     if (trying || trial) {
-      kept = finished_copy(status_now);
+      kept = result;
+      complete(*kept, status_now);
       kept->refinement_rejected = status_now != AdaptiveFitResult::Status::OK;
       kept_cv = fit.cv_score;
       trying = true;

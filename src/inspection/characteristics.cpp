@@ -321,6 +321,7 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
     c.points = static_cast<int>(fit.used.size());
     c.coverage = coverage_factor(c.points);
     bool inside = true, outside_surely = false;
+    std::optional<JudgedPoint> held_back;  // of the points whose d ± U crosses a limit, the one of largest U
     for (Eigen::Index r = 0; r < fit.d.size(); ++r) {
       const double d = fit.d(r);
       const Eigen::Matrix<double, 6, 1> J = fit.J.row(r).transpose();
@@ -341,6 +342,7 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
       const std::size_t at = row[static_cast<std::size_t>(fit.used[static_cast<std::size_t>(r)])];
       if (straddles) c.undecided.push_back(at);
       c.judged.push_back({.row = at, .deviation = d, .U = U});
+      if (straddles && (!held_back || U > held_back->U)) held_back = c.judged.back();
     }
     if (c.points < needed) {
       c.too_few_points = true;
@@ -351,15 +353,10 @@ Inspection evaluate(const Specification& spec, const cad::Model& nominal, const 
     if (c.decision == Decision::Indeterminate) {
       // What holds it back, in one line: the value and its 2u describe the widest point, which may be well inside
       // while a point of large u (a contact whose normal could not be confirmed: u up to r) crosses a limit.
-      const std::set<std::size_t> crossing(c.undecided.begin(), c.undecided.end());
-      const JudgedPoint* widest = nullptr;
-      for (const JudgedPoint& p : c.judged) {
-        if (crossing.contains(p.row) && (widest == nullptr || p.U > widest->U)) widest = &p;
-      }
       char line[200];
-      if (widest != nullptr) {
+      if (held_back) {
         std::snprintf(line, sizeof line, "%zu of its points' d +- U cross a limit of the zone; the largest U %.4f mm, row %zu",
-                      crossing.size(), widest->U, widest->row + 1);
+                      c.undecided.size(), held_back->U, held_back->row + 1);
       } else {
         std::snprintf(line, sizeof line, "a point's U is not finite");
       }

@@ -3,9 +3,9 @@
 // the smoothing chosen by cross-validation (fitting/penalized.hpp), optionally correct the points' parameters by projecting
 // them on the fit, estimate the measurement noise robustly from the residuals, and insert knots in the spans
 // whose residuals the noise does not explain; repeat until every span is consistent with the noise, the data
-// can support no more control points, or the rounds run out. Where every span is consistent but the residuals'
-// spread is above the local noise estimate (a misfit thin over the face), refinement is tried, and each round
-// tried is kept only if it predicts left-out points better.
+// can support no more control points, or the rounds run out. Where every span is consistent but the residuals
+// still show a misfit thin over the face (their spread above the local noise estimate, or neighbouring residuals
+// correlated), refinement is tried, and each round tried is kept only if it predicts left-out points better.
 
 #include <cstdint>
 #include <span>
