@@ -1,6 +1,6 @@
 // The shape suite of issue 48, scored: a command that prints its own figures, not a timed benchmark.
 //   probecomp_shape_suite [--sigma S] [--case NAME[,NAME…]] [--draw N [--first SEED]] [--no-reference]
-//                         [--plain-reference] [--regions] [--stops] [--oracle]
+//                         [--plain-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D]
 // Each case of simulation::shape_suite() (or N cases drawn at random from its families, seeds FIRST, FIRST+1, …)
 // is simulated, compensated by the CAD method and scored against the actual part: std, mean and largest error
 // (µm, ok rows), the rows flagged, ±2u coverage overall and in the worst of 6 × 6 regions, the fitted centre
@@ -10,6 +10,11 @@
 // --sigma replaces every case's noise (mm). --stops prints where each face's refinement stopped and why; --oracle
 // fits each case again with every fit's cross-validated λ moved by ±0.25, 0.5 and 1 decade, and prints the std at
 // each: whether cross-validation over- or under-smooths there (the suite knows the truth; the product does not).
+// --seeds N runs each case N times, the noise drawn again each time on the same points (ShapeCase::noise_draw),
+// and prints per case the spread of the figures over the draws, each region's coverage averaged over them (what
+// u promises a region on average), and the worst region's coverage had each point's u been its true rms error
+// (over the draws): about what a u without fault would reach in the worst region of one draw. --noise-draw D
+// runs draw D of each case's noise instead of its own (0).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -47,12 +52,87 @@ double worst(const std::vector<double>& v, bool largest) {
   return w;
 }
 
+// Each region's share of ok rows whose |error| ≤ 2u (NaN where fewer than kSuiteMinRegionRows are scored).
+using RegionShares = std::array<double, studies::kSuiteRegions * studies::kSuiteRegions>;
+RegionShares region_shares(const std::vector<double>& error, const std::vector<double>& u, const std::vector<int>& region) {
+  std::array<int, std::tuple_size_v<RegionShares>> rows{}, in{};
+  for (std::size_t k = 0; k < error.size(); ++k) {
+    if (!std::isfinite(error[k]) || !std::isfinite(u[k])) continue;
+    const auto g = static_cast<std::size_t>(region[k]);
+    ++rows[g];
+    in[g] += std::abs(error[k]) <= 2.0 * u[k];
+  }
+  RegionShares share;
+  for (std::size_t g = 0; g < share.size(); ++g) {
+    share[g] = rows[g] < studies::kSuiteMinRegionRows ? std::nan("") : static_cast<double>(in[g]) / rows[g];
+  }
+  return share;
+}
+
+struct Replicated {
+  std::vector<double> stds, coverages, worst_regions, oracle_worst_regions;  // per draw; µm and %
+  double lowest_region_mean = std::nan("");  // %: the lowest over regions of the coverage averaged over the draws
+};
+
+// One case over `draws` realisations of its noise. The oracle's u at a point is its rms error over all the draws:
+// its true bias and variance as far as the draws tell them. It flatters the oracle (each draw's own error is one of
+// the terms, and an rms over a few draws is a noisy u; left out, the oracle did worse still): a bound on what a
+// sound u can reach in the worst region of one draw, not a figure to match.
+Replicated replicate(simulation::ShapeCase c, int draws) {
+  Replicated out;
+  std::vector<std::vector<double>> error(static_cast<std::size_t>(draws)), u(static_cast<std::size_t>(draws));
+  std::vector<int> region;
+  for (int d = 0; d < draws; ++d) {
+    c.noise_draw = static_cast<std::uint64_t>(d);
+    const studies::ShapeCaseResult s = studies::run_shape_case(c);
+    out.stds.push_back(s.cad_summary.std * 1e3);
+    out.coverages.push_back(100.0 * s.coverage_2u);
+    out.worst_regions.push_back(100.0 * s.worst_region_coverage_2u);
+    region = s.region;
+    auto& e = error[static_cast<std::size_t>(d)];
+    auto& ud = u[static_cast<std::size_t>(d)];
+    for (std::size_t k = 0; k < s.plan.size(); ++k) {
+      const bool ok = s.cad.points[k].status == compensation::PointStatus::Ok;
+      e.push_back(ok ? s.cad_error[k] : std::nan(""));
+      ud.push_back(ok ? s.cad.points[k].uncertainty : std::nan(""));
+    }
+  }
+  std::vector<double> oracle(region.size(), std::nan(""));
+  for (std::size_t k = 0; k < oracle.size(); ++k) {
+    double sum = 0.0;
+    int n = 0;
+    for (const std::vector<double>& e : error) {
+      if (!std::isfinite(e[k])) continue;
+      sum += e[k] * e[k];
+      ++n;
+    }
+    if (n > 0) oracle[k] = std::sqrt(sum / n);
+  }
+  RegionShares mean{};
+  std::array<int, std::tuple_size_v<RegionShares>> scored{};
+  for (std::size_t d = 0; d < error.size(); ++d) {
+    const RegionShares share = region_shares(error[d], u[d], region);
+    for (std::size_t g = 0; g < share.size(); ++g) {
+      if (!std::isfinite(share[g])) continue;
+      mean[g] += share[g];
+      ++scored[g];
+    }
+    const RegionShares oracle_share = region_shares(error[d], oracle, region);
+    out.oracle_worst_regions.push_back(100.0 * worst(std::vector<double>(oracle_share.begin(), oracle_share.end()), false));
+  }
+  for (std::size_t g = 0; g < mean.size(); ++g) {
+    // Only regions scored in every draw, so that each mean is over the same draws.
+    if (scored[g] == draws) out.lowest_region_mean = std::fmin(out.lowest_region_mean, 100.0 * mean[g] / draws);
+  }
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   double sigma = -1.0;
-  int draw = 0;
-  std::uint64_t first = 1;
+  int draw = 0, seeds = 0;
+  std::uint64_t first = 1, noise_draw = 0;
   bool reference = true, regions = false, plain_reference = false, stops = false, oracle = false;
   std::vector<std::string> only;
   for (int a = 1; a < argc; ++a) {
@@ -87,8 +167,12 @@ int main(int argc, char** argv) {
       stops = true;
     } else if (arg == "--oracle") {
       oracle = true;
+    } else if (arg == "--seeds") {
+      seeds = std::atoi(next().c_str());
+    } else if (arg == "--noise-draw") {
+      noise_draw = std::strtoull(next().c_str(), nullptr, 10);
     } else {
-      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle]\n",
+      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D]\n",
                    argv[0]);
       return 2;
     }
@@ -104,11 +188,37 @@ int main(int argc, char** argv) {
       return std::none_of(only.begin(), only.end(), [&](const std::string& n) { return c.name.find(n) != std::string::npos; });
     });
   }
+  if (seeds > 0) {
+    std::printf("%d draws of the noise per case: median and worst over the draws\n", seeds);
+    std::printf("%-22s %5s | %13s | %11s | %11s | %11s | %s\n", "case", "sigma", "std", "cov2u", "worst region",
+                "oracle's", "lowest region mean");
+    std::vector<double> std_medians, worst_medians, oracle_medians, region_means;
+    for (simulation::ShapeCase c : cases) {
+      if (sigma >= 0.0) c.noise_sigma = sigma;
+      const Replicated r = replicate(c, seeds);
+      std::printf("%-22s %5.1f | %6.3f %6.3f | %5.1f %5.1f | %5.1f %5.1f | %5.1f %5.1f | %5.1f\n", c.name.c_str(),
+                  c.noise_sigma * 1e3, median(r.stds), worst(r.stds, true), median(r.coverages), worst(r.coverages, false),
+                  median(r.worst_regions), worst(r.worst_regions, false), median(r.oracle_worst_regions),
+                  worst(r.oracle_worst_regions, false), r.lowest_region_mean);
+      std::fflush(stdout);
+      std_medians.push_back(median(r.stds));
+      worst_medians.push_back(median(r.worst_regions));
+      oracle_medians.push_back(median(r.oracle_worst_regions));
+      region_means.push_back(r.lowest_region_mean);
+    }
+    std::printf("SUMMARY over %zu cases (medians over draws): std median %.3f worst %.3f | worst region median %.1f lowest %.1f"
+                " | oracle's worst region median %.1f lowest %.1f | lowest region mean median %.1f lowest %.1f\n",
+                cases.size(), median(std_medians), worst(std_medians, true), median(worst_medians),
+                worst(worst_medians, false), median(oracle_medians), worst(oracle_medians, false), median(region_means),
+                worst(region_means, false));
+    return 0;
+  }
   std::printf("%-22s %5s %6s | %6s %6s %6s %4s | %6s %6s %5s | %6s | %6s %6s %5s | features\n", "case", "sigma", "rows", "std",
               "mean", "max", "flag", "cov2u", "worst", "u", "fitrms", "refstd", "refmax", "ratio");
   std::vector<Row> rows;
   for (simulation::ShapeCase c : cases) {
     if (sigma >= 0.0) c.noise_sigma = sigma;
+    c.noise_draw = noise_draw;
     Row r;
     r.name = c.name;
     r.sigma = c.noise_sigma * 1e3;

@@ -77,6 +77,35 @@ TEST(ShapeSuite, ScanLinesWithoutNoiseDoNotRingBetweenTheLines) {
   }
 }
 
+// ShapeCase::noise_draw replicates a case: the same part, the same programmed points and the same true contacts,
+// the noise drawn afresh (independent of the case's own, of the same σ), so that a figure can be told apart from
+// what one draw of the noise happened to do.
+TEST(ShapeSuite, ANoiseDrawKeepsThePartAndThePointsAndDrawsTheNoiseAfresh) {
+  simulation::ShapeCase c = suite_case("S02");
+  c.points = 1500;
+  const ShapeCaseResult own = run_shape_case(c);
+  c.noise_draw = 1;
+  const ShapeCaseResult again = run_shape_case(c);
+  ASSERT_EQ(own.touches.size(), again.touches.size());
+  double squared = 0.0, cross = 0.0, own_squared = 0.0, again_squared = 0.0;
+  for (std::size_t k = 0; k < own.touches.size(); ++k) {
+    ASSERT_EQ(own.plan[k].point, again.plan[k].point) << k;
+    ASSERT_EQ(own.touches[k].contact, again.touches[k].contact) << k;
+    ASSERT_EQ(own.touches[k].centre, again.touches[k].centre) << k;
+    const Vector3 e0 = own.touches[k].measured - own.touches[k].centre;
+    const Vector3 e1 = again.touches[k].measured - again.touches[k].centre;
+    squared += (e0 - e1).squaredNorm();
+    cross += e0.dot(e1);
+    own_squared += e0.squaredNorm();
+    again_squared += e1.squaredNorm();
+  }
+  const double n = static_cast<double>(own.touches.size());
+  // Independent draws of σ per coordinate: E|e0 − e1|² = 6σ² (standard error of the mean about 2 % here), and
+  // their correlation 0 within a standard error of 1/√(3n) = 0.015.
+  EXPECT_NEAR(squared / (6.0 * n * c.noise_sigma * c.noise_sigma), 1.0, 0.1);
+  EXPECT_LT(std::abs(cross) / std::sqrt(own_squared * again_squared), 0.06);
+}
+
 // A misfit spread thin over a face inflates the residuals' spread, which every span is then measured against, so
 // no span stands out and the refinement stopped with the shape half followed and u blind to it. Two cases drawn
 // from the suite's families (draw_shape_case, seeds 207 and 410; σ = 4.5 µm, random points): a bulge 0.34 mm high

@@ -67,6 +67,9 @@ struct ShapeCase {
   double rx = 0.0, ry = 0.0, rz = 0.0;
   Vector3 t = Vector3::Zero();
   std::uint64_t seed = 1;  // noise and random points
+  // Which realisation of the noise: 0 is the case's own; others draw the noise again on the same points and the
+  // same part, to tell what a fit does on average from what one draw of the noise happens to do.
+  std::uint64_t noise_draw = 0;
   [[nodiscard]] geometry::RigidTransform placement() const;
 };
 

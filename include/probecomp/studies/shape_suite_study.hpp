@@ -13,6 +13,8 @@
 namespace probecomp::studies {
 
 inline constexpr int kSuiteRegions = 6;  // per direction of the face's domain
+// Fewer ok rows than this in a region make its coverage a matter of a point or two: it is not scored.
+inline constexpr int kSuiteMinRegionRows = 20;
 
 struct ShapeCaseResult : MethodComparison {
   simulation::ShapeCase shape;
