@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numeric>
 #include <optional>
 
 #include "probecomp/fitting/noise_estimate.hpp"
@@ -55,6 +56,30 @@ constexpr double kMisfitRatio = 1.35;
 // Neighbouring residuals' correlation counts as a misfit's above this many standard errors of it on independent
 // noise, 1/√(K·n) for n points of K neighbours each: three, since the pairs overlap (see fit_surface).
 constexpr double kCorrelationStandardErrors = 3.0;
+
+// Draws of pure noise run through a fit (fitting::null_statistics) to judge its residuals: their mean correlation is
+// then known to about a third of its spread. Four solves with the fit's factor.
+constexpr int kNullProbes = 12;
+
+// Whether neighbouring residuals correlate beyond what the fit alone makes of pure noise: by more than
+// kCorrelationStandardErrors of the larger of its null draws' spread and 1/√(K·n) above their mean (below 0, as a
+// fit's residuals repel one another by about its leverage: −0.02 to −0.08 on the shape suite's final fits). Above
+// 0 by as much, no draws are needed; a fit too large to keep its basis rows is measured against that alone.
+bool correlated_beyond_the_fit(const LocalPredictionNoise& local_noise, std::span<const double> residuals,
+                               const PenalizedFitResult& fit) {
+  const double observed = local_noise.neighbour_correlation(residuals);
+  const double se = 1.0 / std::sqrt(static_cast<double>(LocalPredictionNoise::kNeighbours) *
+                                    static_cast<double>(std::max<std::size_t>(local_noise.tested(), 1)));
+  if (observed > kCorrelationStandardErrors * se) return true;
+  const std::vector<double> null = null_statistics(
+      fit, kNullProbes, [&](std::span<const double> r) { return local_noise.neighbour_correlation(r); });
+  if (null.size() < 2) return false;
+  const double mean = std::accumulate(null.begin(), null.end(), 0.0) / static_cast<double>(null.size());
+  double squares = 0.0;
+  for (double x : null) squares += (x - mean) * (x - mean);
+  const double sd = std::sqrt(squares / static_cast<double>(null.size() - 1));
+  return observed > mean + kCorrelationStandardErrors * std::max(sd, se);
+}
 
 // A neighbourhood's mean-square excess counts as bias only above the χ² quantile exceeded by noise alone with
 // this probability (see the bias estimate in fit_surface).
@@ -396,9 +421,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     if (result.spans_above_noise == 0 && round < options.max_rounds && result.noise_sigma > options.noise_floor &&
         options.fit.cross_validation == CrossValidation::LeaveOneOut &&
         ((std::isfinite(local) && spread > local) ||
-         local_noise.neighbour_correlation(standardised) >
-             kCorrelationStandardErrors / std::sqrt(static_cast<double>(LocalPredictionNoise::kNeighbours) *
-                                                    static_cast<double>(std::max<std::size_t>(local_noise.tested(), 1))))) {
+         correlated_beyond_the_fit(local_noise, result.residuals, fit))) {
       for (std::size_t a = 0; a < nsu; ++a) {
         for (std::size_t b = 0; b < nsv; ++b) {
           const std::size_t s = a * nsv + b;

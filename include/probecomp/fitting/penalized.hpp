@@ -25,6 +25,8 @@
 // inside its band, by the Takahashi recurrence on the band Cholesky factor (Takahashi, Fagan and Chin 1973; the
 // "selected inversion" of sparse solvers), in O(K·b²) for K control points and bandwidth b, like the factorisation.
 
+#include <functional>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -66,6 +68,8 @@ struct PenalizedFitOptions {
   double log10_smoothing_offset = 0.0;
 };
 
+struct LinearFit;  // penalized.cpp
+
 struct PenalizedFitResult {
   using Status = FitStatus;
   Status status = Status::NotDone;
@@ -88,8 +92,11 @@ struct PenalizedFitResult {
   // follows.
   std::vector<double> span_roughness{};
   // Per point: the fit's smoothing bias there (the fitted point's expected error due to the penalty), estimated
-  // by −λ·R(u,v)ᵀ(AᵀWA + λG)⁻¹·G·D̃, mm, with D̃ = D̂ corrected once by the same estimate (see fit_penalized).
+  // by −λ·R(u,v)ᵀ(AᵀWA + λG)⁻¹·G·D̃, mm, with D̃ = D̂ corrected by passes of the same estimate (see fit_penalized).
   std::vector<Vector3> smoothing_bias{};
+  // The fit at its λ as a linear map of the data (its factor and the points' basis rows), for null_statistics;
+  // kept only where the rows were (below 2·16 384 points).
+  std::shared_ptr<const LinearFit> linear{};
 
   [[nodiscard]] bool ok() const { return status == Status::OK; }
 };
@@ -102,5 +109,12 @@ struct PenalizedFitResult {
                                                std::span<const double> weights = {},
                                                const PenalizedFitOptions& options = {},
                                                std::span<const double> span_weights = {});
+
+// A statistic of a fit's residuals under pure noise: at its λ the fit is linear in the data, so its residuals of
+// `probes` draws of pure noise (variance 1/w_k at point k, from a fixed seed) show what the fit alone does to the
+// statistic (its residuals repel one another, for one). `statistic` is passed each draw's residuals, one per
+// point; its values are returned in draw order. Empty where the fit kept no LinearFit. Deterministic.
+[[nodiscard]] std::vector<double> null_statistics(const PenalizedFitResult& fit, int probes,
+                                                  const std::function<double(std::span<const double>)>& statistic);
 
 }  // namespace probecomp::fitting
