@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -104,6 +105,48 @@ TEST(ShapeSuite, ANoiseDrawKeepsThePartAndThePointsAndDrawsTheNoiseAfresh) {
   // their correlation 0 within a standard error of 1/√(3n) = 0.015.
   EXPECT_NEAR(squared / (6.0 * n * c.noise_sigma * c.noise_sigma), 1.0, 0.1);
   EXPECT_LT(std::abs(cross) / std::sqrt(own_squared * again_squared), 0.06);
+}
+
+// ±2u's coverage in each of 6 × 6 regions of the face, averaged over 8 draws of the noise: what u promises a region
+// (one draw's coverage of a region swings with the few independent errors it holds, even for a u that knows each
+// point's true rms error: docs/accuracy.md). S09 (a twist and two dents on the hood, random points) and S12 (a
+// crease and a band wave at σ = 10 µm): their lowest regions held 87.8 and 83.8 % on average, and one of S12's draws
+// 82.5 % overall, before the smoothing-bias estimate took eight passes and the thin-misfit trial its bound from
+// the fit's own null draws (2f46744); 92.1 and 92.5 % after, every draw 93.9 % or more overall.
+TEST(ShapeSuite, EveryRegionsCoverageAveragedOverDrawsOfTheNoiseIsAtLeast88Percent) {
+  if (test::kLight) GTEST_SKIP() << "16 runs of the pipeline; ANoiseDrawKeepsThePartAndThePointsAndDrawsTheNoiseAfresh runs the same code";
+  constexpr int kDraws = 8;
+  constexpr std::size_t kRegions = kSuiteRegions * kSuiteRegions;
+  for (const char* name : {"S09", "S12"}) {
+    SCOPED_TRACE(name);
+    simulation::ShapeCase c = suite_case(name);
+    std::array<double, kRegions> sum{};
+    std::array<int, kRegions> scored{};
+    for (int d = 0; d < kDraws; ++d) {
+      c.noise_draw = static_cast<std::uint64_t>(d);
+      const ShapeCaseResult r = run_shape_case(c);
+      EXPECT_GE(r.coverage_2u, 0.92) << "draw " << d;
+      EXPECT_LE(r.coverage_2u, 0.99) << "draw " << d;
+      std::array<int, kRegions> rows{}, in{};
+      for (std::size_t k = 0; k < r.plan.size(); ++k) {
+        if (r.cad.points[k].status != compensation::PointStatus::Ok || !std::isfinite(r.cad_error[k])) continue;
+        const auto g = static_cast<std::size_t>(r.region[k]);
+        ++rows[g];
+        in[g] += std::abs(r.cad_error[k]) <= 2.0 * r.cad.points[k].uncertainty;
+      }
+      for (std::size_t g = 0; g < kRegions; ++g) {
+        if (rows[g] < kSuiteMinRegionRows) continue;
+        sum[g] += static_cast<double>(in[g]) / rows[g];
+        ++scored[g];
+      }
+    }
+    double lowest = 1.0;
+    for (std::size_t g = 0; g < kRegions; ++g) {
+      if (scored[g] == kDraws) lowest = std::min(lowest, sum[g] / kDraws);
+    }
+    std::printf("%s: lowest region's coverage averaged over %d draws %.1f %%\n", name, kDraws, 100.0 * lowest);
+    EXPECT_GE(lowest, 0.88);
+  }
 }
 
 // A misfit spread thin over a face inflates the residuals' spread, which every span is then measured against, so
