@@ -52,81 +52,6 @@ double worst(const std::vector<double>& v, bool largest) {
   return w;
 }
 
-// Each region's share of ok rows whose |error| ≤ 2u (NaN where fewer than kSuiteMinRegionRows are scored).
-using RegionShares = std::array<double, studies::kSuiteRegions * studies::kSuiteRegions>;
-RegionShares region_shares(const std::vector<double>& error, const std::vector<double>& u, const std::vector<int>& region) {
-  std::array<int, std::tuple_size_v<RegionShares>> rows{}, in{};
-  for (std::size_t k = 0; k < error.size(); ++k) {
-    if (!std::isfinite(error[k]) || !std::isfinite(u[k])) continue;
-    const auto g = static_cast<std::size_t>(region[k]);
-    ++rows[g];
-    in[g] += std::abs(error[k]) <= 2.0 * u[k];
-  }
-  RegionShares share;
-  for (std::size_t g = 0; g < share.size(); ++g) {
-    share[g] = rows[g] < studies::kSuiteMinRegionRows ? std::nan("") : static_cast<double>(in[g]) / rows[g];
-  }
-  return share;
-}
-
-struct Replicated {
-  std::vector<double> stds, coverages, worst_regions, oracle_worst_regions;  // per draw; µm and %
-  double lowest_region_mean = std::nan("");  // %: the lowest over regions of the coverage averaged over the draws
-};
-
-// One case over `draws` realisations of its noise. The oracle's u at a point is its rms error over all the draws:
-// its true bias and variance as far as the draws tell them. It flatters the oracle (each draw's own error is one of
-// the terms, and an rms over a few draws is a noisy u; left out, the oracle did worse still): a bound on what a
-// sound u can reach in the worst region of one draw, not a figure to match.
-Replicated replicate(simulation::ShapeCase c, int draws) {
-  Replicated out;
-  std::vector<std::vector<double>> error(static_cast<std::size_t>(draws)), u(static_cast<std::size_t>(draws));
-  std::vector<int> region;
-  for (int d = 0; d < draws; ++d) {
-    c.noise_draw = static_cast<std::uint64_t>(d);
-    const studies::ShapeCaseResult s = studies::run_shape_case(c);
-    out.stds.push_back(s.cad_summary.std * 1e3);
-    out.coverages.push_back(100.0 * s.coverage_2u);
-    out.worst_regions.push_back(100.0 * s.worst_region_coverage_2u);
-    region = s.region;
-    auto& e = error[static_cast<std::size_t>(d)];
-    auto& ud = u[static_cast<std::size_t>(d)];
-    for (std::size_t k = 0; k < s.plan.size(); ++k) {
-      const bool ok = s.cad.points[k].status == compensation::PointStatus::Ok;
-      e.push_back(ok ? s.cad_error[k] : std::nan(""));
-      ud.push_back(ok ? s.cad.points[k].uncertainty : std::nan(""));
-    }
-  }
-  std::vector<double> oracle(region.size(), std::nan(""));
-  for (std::size_t k = 0; k < oracle.size(); ++k) {
-    double sum = 0.0;
-    int n = 0;
-    for (const std::vector<double>& e : error) {
-      if (!std::isfinite(e[k])) continue;
-      sum += e[k] * e[k];
-      ++n;
-    }
-    if (n > 0) oracle[k] = std::sqrt(sum / n);
-  }
-  RegionShares mean{};
-  std::array<int, std::tuple_size_v<RegionShares>> scored{};
-  for (std::size_t d = 0; d < error.size(); ++d) {
-    const RegionShares share = region_shares(error[d], u[d], region);
-    for (std::size_t g = 0; g < share.size(); ++g) {
-      if (!std::isfinite(share[g])) continue;
-      mean[g] += share[g];
-      ++scored[g];
-    }
-    const RegionShares oracle_share = region_shares(error[d], oracle, region);
-    out.oracle_worst_regions.push_back(100.0 * worst(std::vector<double>(oracle_share.begin(), oracle_share.end()), false));
-  }
-  for (std::size_t g = 0; g < mean.size(); ++g) {
-    // Only regions scored in every draw, so that each mean is over the same draws.
-    if (scored[g] == draws) out.lowest_region_mean = std::fmin(out.lowest_region_mean, 100.0 * mean[g] / draws);
-  }
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -195,16 +120,22 @@ int main(int argc, char** argv) {
     std::vector<double> std_medians, worst_medians, oracle_medians, region_means;
     for (simulation::ShapeCase c : cases) {
       if (sigma >= 0.0) c.noise_sigma = sigma;
-      const Replicated r = replicate(c, seeds);
+      const studies::ReplicatedShapeCase r = studies::replicate_shape_case(c, seeds);
+      auto scaled = [](std::vector<double> v, double by) {
+        for (double& x : v) x *= by;
+        return v;
+      };
+      const auto stds = scaled(r.stds, 1e3), coverages = scaled(r.coverages, 100.0);
+      const auto worsts = scaled(r.worst_regions, 100.0), oracles = scaled(r.oracle_worst_regions, 100.0);
       std::printf("%-22s %5.1f | %6.3f %6.3f | %5.1f %5.1f | %5.1f %5.1f | %5.1f %5.1f | %5.1f\n", c.name.c_str(),
-                  c.noise_sigma * 1e3, median(r.stds), worst(r.stds, true), median(r.coverages), worst(r.coverages, false),
-                  median(r.worst_regions), worst(r.worst_regions, false), median(r.oracle_worst_regions),
-                  worst(r.oracle_worst_regions, false), r.lowest_region_mean);
+                  c.noise_sigma * 1e3, median(stds), worst(stds, true), median(coverages), worst(coverages, false),
+                  median(worsts), worst(worsts, false), median(oracles), worst(oracles, false),
+                  100.0 * r.lowest_region_mean);
       std::fflush(stdout);
-      std_medians.push_back(median(r.stds));
-      worst_medians.push_back(median(r.worst_regions));
-      oracle_medians.push_back(median(r.oracle_worst_regions));
-      region_means.push_back(r.lowest_region_mean);
+      std_medians.push_back(median(stds));
+      worst_medians.push_back(median(worsts));
+      oracle_medians.push_back(median(oracles));
+      region_means.push_back(100.0 * r.lowest_region_mean);
     }
     std::printf("SUMMARY over %zu cases (medians over draws): std median %.3f worst %.3f | worst region median %.1f lowest %.1f"
                 " | oracle's worst region median %.1f lowest %.1f | lowest region mean median %.1f lowest %.1f\n",

@@ -196,12 +196,10 @@ struct Trial {
 
 }  // namespace
 
-// The fit at its λ: the factor of AᵀWA + λG + εI, each point's basis row and its weight (PenalizedFitResult::linear).
+// The fit at its λ: the factor of AᵀWA + λG + εI and each point's basis row and weight (PenalizedFitResult::linear).
 struct LinearFit {
   Band L;
-  CvRows rows;
-  std::vector<double> weights;  // empty: all 1
-  int n = 0;                    // unknowns
+  CvRows rows;  // covering every point (CvRows::cover_every_point)
 };
 
 namespace {
@@ -661,8 +659,7 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     });
   }
   if (rows.cover_every_point()) {
-    result.linear = std::make_shared<const LinearFit>(LinearFit{std::move(best.L), std::move(rows),
-                                                                std::vector<double>(weights.begin(), weights.end()), n});
+    result.linear = std::make_shared<const LinearFit>(LinearFit{std::move(best.L), std::move(rows)});
   }
   result.status = PenalizedFitResult::Status::OK;
   return result;
@@ -678,15 +675,16 @@ std::vector<double> null_statistics(const PenalizedFitResult& fit, int probes,
   std::normal_distribution<double> normal;
   const std::size_t n_points = f.rows.row_of_point.size();
   const auto m = static_cast<std::size_t>(f.rows.m);
-  std::vector<double> noise(3 * n_points, 0.0), rhs(static_cast<std::size_t>(f.n) * 3), residual(n_points);
+  std::vector<double> noise(3 * n_points, 0.0), rhs(static_cast<std::size_t>(f.L.n) * 3), residual(n_points);
   std::vector<double> out;
   for (int first = 0; first < probes; first += 3) {
     std::fill(rhs.begin(), rhs.end(), 0.0);
     for (std::size_t k = 0; k < n_points; ++k) {
-      const double w = f.weights.empty() ? 1.0 : f.weights[k];
-      for (std::size_t c = 0; c < 3; ++c) noise[3 * k + c] = w > 0.0 ? normal(rng) / std::sqrt(w) : 0.0;
+      // A point without a row has weight 0: no noise, and no part in the fit.
       const std::uint32_t r = f.rows.row_of_point[k];
       if (r == CvRows::kNoRow) continue;
+      const double w = f.rows.w[r];
+      for (std::size_t c = 0; c < 3; ++c) noise[3 * k + c] = normal(rng) / std::sqrt(w);
       for (std::size_t a = 0; a < m; ++a) {
         const double wR = w * f.rows.R[r * m + a];
         const auto I = static_cast<std::size_t>(f.rows.idx[r * m + a]);

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include "probecomp/nurbs/closest_point.hpp"
 
@@ -14,6 +17,22 @@ namespace {
 constexpr std::uint64_t kNoiseDrawStride = 1'000'003;
 
 }  // namespace
+
+RegionShares region_coverage_2u(std::span<const double> error, std::span<const double> u, std::span<const int> region) {
+  std::array<int, std::tuple_size_v<RegionShares>> rows{}, covered{};
+  for (std::size_t k = 0; k < error.size(); ++k) {
+    if (!std::isfinite(error[k])) continue;
+    const auto g = static_cast<std::size_t>(region[k]);
+    ++rows[g];
+    covered[g] += std::abs(error[k]) <= 2.0 * u[k];
+  }
+  RegionShares share;
+  for (std::size_t g = 0; g < share.size(); ++g) {
+    share[g] = rows[g] < kSuiteMinRegionRows ? std::numeric_limits<double>::quiet_NaN()
+                                             : static_cast<double>(covered[g]) / rows[g];
+  }
+  return share;
+}
 
 ShapeCaseResult run_shape_case(const simulation::ShapeCase& c, const compensation::CompensateOptions& options) {
   ShapeCaseResult out;
@@ -34,9 +53,9 @@ ShapeCaseResult run_shape_case(const simulation::ShapeCase& c, const compensatio
   const nurbs::Domain d = s.domain();
   out.region.resize(out.plan.size());
   const nurbs::ClosestPointSolver nominal_solver(s);
-  std::array<int, kSuiteRegions * kSuiteRegions> rows{}, covered{};
   int all_rows = 0, all_covered = 0;
   double u_sum = 0.0;
+  std::vector<double> u(out.plan.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t k = 0; k < out.plan.size(); ++k) {
     // The programmed point's parameters on the nominal: where on the face it was planned.
     const nurbs::ClosestPointResult foot = nominal_solver.closest_point(out.plan[k].point);
@@ -49,22 +68,20 @@ ShapeCaseResult run_shape_case(const simulation::ShapeCase& c, const compensatio
       continue;
     }
     if (!std::isfinite(out.cad_error[k])) continue;
-    const bool in = std::abs(out.cad_error[k]) <= 2.0 * p.uncertainty;
-    ++rows[static_cast<std::size_t>(out.region[k])];
-    covered[static_cast<std::size_t>(out.region[k])] += in;
+    u[k] = p.uncertainty;
     ++all_rows;
-    all_covered += in;
+    all_covered += std::abs(out.cad_error[k]) <= 2.0 * p.uncertainty;
     u_sum += p.uncertainty;
   }
+  // (cad_error is NaN for every row not ok: errors_against.)
+  out.region_coverage = region_coverage_2u(out.cad_error, u, out.region);
   if (all_rows > 0) {
     out.coverage_2u = static_cast<double>(all_covered) / all_rows;
     out.mean_uncertainty = u_sum / all_rows;
     out.worst_region_coverage_2u = 1.0;
-    for (std::size_t g = 0; g < rows.size(); ++g) {
-      if (rows[g] < kSuiteMinRegionRows) continue;
-      const double share = static_cast<double>(covered[g]) / rows[g];
-      if (share < out.worst_region_coverage_2u) {
-        out.worst_region_coverage_2u = share;
+    for (std::size_t g = 0; g < out.region_coverage.size(); ++g) {
+      if (out.region_coverage[g] < out.worst_region_coverage_2u) {
+        out.worst_region_coverage_2u = out.region_coverage[g];
         out.worst_region = static_cast<int>(g);
       }
     }
@@ -79,6 +96,50 @@ ShapeCaseResult run_shape_case(const simulation::ShapeCase& c, const compensatio
       sum += e * e;
     }
     out.fit_rms = std::sqrt(sum / static_cast<double>(out.touches.size()));
+  }
+  return out;
+}
+
+ReplicatedShapeCase replicate_shape_case(simulation::ShapeCase c, int draws) {
+  ReplicatedShapeCase out;
+  std::vector<std::vector<double>> error;  // per draw, per row (NaN where not ok)
+  std::vector<int> region;
+  RegionShares sum{};
+  std::array<int, std::tuple_size_v<RegionShares>> scored{};
+  for (int d = 0; d < draws; ++d) {
+    c.noise_draw = static_cast<std::uint64_t>(d);
+    ShapeCaseResult s = run_shape_case(c);
+    out.stds.push_back(s.cad_summary.std);
+    out.coverages.push_back(s.coverage_2u);
+    out.worst_regions.push_back(s.worst_region_coverage_2u);
+    for (std::size_t g = 0; g < sum.size(); ++g) {
+      if (!std::isfinite(s.region_coverage[g])) continue;
+      sum[g] += s.region_coverage[g];
+      ++scored[g];
+    }
+    region = std::move(s.region);
+    error.push_back(std::move(s.cad_error));
+  }
+  std::vector<double> oracle(region.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t k = 0; k < oracle.size(); ++k) {
+    double squares = 0.0;
+    int n = 0;
+    for (const std::vector<double>& e : error) {
+      if (!std::isfinite(e[k])) continue;
+      squares += e[k] * e[k];
+      ++n;
+    }
+    if (n > 0) oracle[k] = std::sqrt(squares / n);
+  }
+  for (const std::vector<double>& e : error) {
+    const RegionShares share = region_coverage_2u(e, oracle, region);
+    double lowest = std::numeric_limits<double>::quiet_NaN();
+    for (const double x : share) lowest = std::fmin(lowest, x);  // fmin passes over the NaN of unscored regions
+    out.oracle_worst_regions.push_back(lowest);
+  }
+  for (std::size_t g = 0; g < sum.size(); ++g) {
+    // Only regions scored in every draw, so that each mean is over the same draws.
+    if (scored[g] == draws) out.lowest_region_mean = std::fmin(out.lowest_region_mean, sum[g] / draws);
   }
   return out;
 }

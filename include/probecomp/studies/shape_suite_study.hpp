@@ -5,6 +5,8 @@
 // is from the true one.
 
 #include <array>
+#include <limits>
+#include <span>
 #include <vector>
 
 #include "probecomp/simulation/shape_suite.hpp"
@@ -16,6 +18,12 @@ inline constexpr int kSuiteRegions = 6;  // per direction of the face's domain
 // Fewer ok rows than this in a region make its coverage a matter of a point or two: it is not scored.
 inline constexpr int kSuiteMinRegionRows = 20;
 
+// Per region (a · kSuiteRegions + b): the share of its rows with a finite error whose |error| ≤ 2u; NaN where
+// fewer than kSuiteMinRegionRows such rows are scored.
+using RegionShares = std::array<double, kSuiteRegions * kSuiteRegions>;
+[[nodiscard]] RegionShares region_coverage_2u(std::span<const double> error, std::span<const double> u,
+                                              std::span<const int> region);
+
 struct ShapeCaseResult : MethodComparison {
   simulation::ShapeCase shape;
   cad::Model nominal;
@@ -24,7 +32,8 @@ struct ShapeCaseResult : MethodComparison {
   std::vector<int> region;
   int flagged = 0;            // the CAD method's rows not ok
   double coverage_2u = 0.0;   // share of ok rows whose |error| ≤ 2u
-  double worst_region_coverage_2u = 0.0;  // the lowest such share over regions holding ≥ 20 ok rows
+  RegionShares region_coverage{};         // each region's (region_coverage_2u of the ok rows)
+  double worst_region_coverage_2u = 0.0;  // the lowest of them
   int worst_region = -1;
   double mean_uncertainty = 0.0;  // mm, ok rows
   // The rms distance of the true probe centres from the fitted centre surface, mm (NaN if the face was not fitted).
@@ -33,5 +42,19 @@ struct ShapeCaseResult : MethodComparison {
 
 [[nodiscard]] ShapeCaseResult run_shape_case(const simulation::ShapeCase& c,
                                              const compensation::CompensateOptions& options = {});
+
+// A case over `draws` draws of its noise (ShapeCase::noise_draw 0, 1, …), to tell what u promises a region on
+// average from what one draw happens to give.
+struct ReplicatedShapeCase {
+  // Per draw: the CAD method's std (mm), ±2u coverage overall and in the worst region (shares).
+  std::vector<double> stds, coverages, worst_regions;
+  // Per draw: the worst region's coverage had each point's u been its rms error over all the draws (its true bias
+  // and variance as far as the draws tell them). That flatters it (each draw's own error is one of the terms): a
+  // bound on what a sound u can reach in the worst region of one draw, not a figure to match.
+  std::vector<double> oracle_worst_regions;
+  // The lowest over regions scored in every draw of the region's coverage averaged over the draws (NaN if none).
+  double lowest_region_mean = std::numeric_limits<double>::quiet_NaN();
+};
+[[nodiscard]] ReplicatedShapeCase replicate_shape_case(simulation::ShapeCase c, int draws);
 
 }  // namespace probecomp::studies
