@@ -14,6 +14,7 @@
 
 #include "assembly.hpp"
 #include "band.hpp"
+#include "hierarchical_rows.hpp"
 #include "penalty.hpp"
 #include "rational_basis.hpp"
 
@@ -53,20 +54,46 @@ std::vector<Point3> cartesian_net(const Surface& s) {
   return net;
 }
 
-// The start surface's basis at t: its rational basis functions in rb, the unknown each one multiplies in idx, and
-// the start surface's point S⁰(t) (the basis row every use of a point needs); `net` is cartesian_net(s).
-Vector3 basis_row(const Surface& s, std::span<const Point3> net, const Ordering& order, const SurfaceParameter& t,
-                  RationalBasis& rb, int* idx) {
-  detail::rational_basis(s, t.u, t.v, rb);
-  row_unknowns(s, order, rb, idx);
-  const int p = s.p(), q = s.q();
-  Vector3 S0 = Vector3::Zero();
-  for (int i = 0; i <= p; ++i) {
-    const Point3* row = &net[static_cast<std::size_t>(rb.i0 + i) * s.num_v() + rb.j0];
-    for (int j = 0; j <= q; ++j) S0 += rb.R[i * (q + 1) + j] * row[j];
+// A point's basis row: the fitted functions non-zero at t, their values and unknowns. Those are the surface s's
+// rational basis functions, or with a hierarchical basis (hierarchical.hpp, s its output surface) the THB
+// functions reduced from them. Rows are `m` long: a THB row shorter than that is padded with zero values on its
+// last unknown, which add nothing to any sum, and `len` says how many are its own. `key` names t's knot span of s
+// (its first control point's index in `order`): rows with one key have the same unknowns.
+struct RowMaker {
+  const Surface& s;
+  std::span<const Point3> net;  // cartesian_net(s)
+  const Ordering& order;        // of s's control points
+  const HierarchicalBasis* thb = nullptr;
+  int n = 0;  // unknowns
+  int m = 0;  // row length
+  RowMaker(const Surface& s_, std::span<const Point3> net_, const Ordering& order_, const HierarchicalBasis* thb_)
+      : s(s_), net(net_), order(order_), thb(thb_), n(thb_ ? thb_->unknowns : s_.num_u() * s_.num_v()),
+        m(thb_ ? thb_->max_row : (s_.p() + 1) * (s_.q() + 1)) {}
+  [[nodiscard]] int bandwidth() const {
+    return std::min(thb ? thb->bandwidth : order.bandwidth(s.p(), s.q()), n - 1);
   }
-  return S0;
-}
+  // The row at t in R, idx, key and len; returns the start surface's point S⁰(t), which every use of a row needs.
+  Vector3 operator()(const SurfaceParameter& t, RationalBasis& rb, double* R, int* idx, int& key, int& len) const {
+    detail::rational_basis(s, t.u, t.v, rb);
+    const int p = s.p(), q = s.q();
+    Vector3 S0 = Vector3::Zero();
+    for (int i = 0; i <= p; ++i) {
+      const Point3* row = &net[static_cast<std::size_t>(rb.i0 + i) * s.num_v() + rb.j0];
+      for (int j = 0; j <= q; ++j) S0 += rb.R[i * (q + 1) + j] * row[j];
+    }
+    key = order.index(rb.i0, rb.j0);
+    if (thb == nullptr) {
+      row_unknowns(s, order, rb, idx);
+      std::copy(rb.R, rb.R + m, R);
+      len = m;
+    } else {
+      len = detail::reduce_row(*thb, rb.i0, rb.j0, rb.R, R, idx);
+      std::fill(R + len, R + m, 0.0);
+      std::fill(idx + len, idx + m, idx[len - 1]);
+    }
+    return S0;
+  }
+};
 
 // Points the cross-validation score is summed over at most.
 constexpr std::size_t kCvPoints = 16384;
@@ -80,9 +107,11 @@ std::size_t cv_stride(std::size_t n_points) { return std::max<std::size_t>(1, n_
 // The rows are ordered by knot span (stably: the same order for any thread count), so that each trial reads the
 // band inverse once per span, not once per point.
 struct CvRows {
-  int m = 0;                 // basis functions per row, (p + 1)(q + 1)
-  std::vector<int> idx;      // m per row; idx[0] names the row's span (its first unknown)
+  int m = 0;                 // basis functions per row (RowMaker::m)
+  std::vector<int> idx;      // m per row
   std::vector<double> R;     // m per row
+  std::vector<int> key;      // one per row: its knot span (RowMaker)
+  std::vector<int> len;      // one per row: its own functions, the first len of its m
   std::vector<Vector3> y;    // one per row
   std::vector<double> w;     // one per row
   // Each point's row, kNoRow for a point of weight 0, when the rows are those of every point (a stride of 1); else
@@ -105,11 +134,9 @@ struct DataTerms {
 };
 
 // `rows`, when given, cover every point and give each point's basis row and offset (else each is evaluated here).
-DataTerms assemble_data(const Surface& s, std::span<const Point3> net, const Ordering& order, int b,
-                        std::span<const Point3> points, std::span<const SurfaceParameter> params,
-                        std::span<const double> weights, const CvRows* rows) {
-  const int n = s.num_u() * s.num_v();
-  const int p = s.p(), q = s.q();
+DataTerms assemble_data(const RowMaker& maker, int b, std::span<const Point3> points,
+                        std::span<const SurfaceParameter> params, std::span<const double> weights, const CvRows* rows) {
+  const int n = maker.n;
   const std::size_t n_points = points.size();
   const std::size_t bytes = static_cast<std::size_t>(n) * (b + 4) * sizeof(double);
   const std::size_t chunks = chunk_count(n_points, bytes);
@@ -117,18 +144,17 @@ DataTerms assemble_data(const Surface& s, std::span<const Point3> net, const Ord
   // Consecutive points in one knot span (a scan line crosses a span in tens of points) share their unknowns:
   // their outer products are summed in a small dense block, which is added into the band once per run of them,
   // instead of each point's products scattered into the band (a million points: about twice as fast).
-  constexpr int kMaxRow = (nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
     DataTerms& t = parts[c];
     t.AtWA = Band(n, b);
     t.AtWy.assign(static_cast<std::size_t>(n) * 3, 0.0);
     RationalBasis rb;
-    int own_idx[kMaxRow];
-    const int m = (p + 1) * (q + 1);
-    double block[kMaxRow * kMaxRow];  // block[x·m + y], y ≤ x: Σ w R_x R_y over the run
-    double block_y[kMaxRow * 3];      // Σ w R_x y
-    int run_idx[kMaxRow];
-    int run_span = -1;  // the run's first unknown, idx[0]: its knot span
+    const int m = maker.m;
+    std::vector<int> own_idx(static_cast<std::size_t>(m)), run_idx(own_idx);
+    std::vector<double> own_R(static_cast<std::size_t>(m));
+    std::vector<double> block(static_cast<std::size_t>(m * m));  // block[x·m + y], y ≤ x: Σ w R_x R_y over the run
+    std::vector<double> block_y(static_cast<std::size_t>(m * 3)); // Σ w R_x y
+    int run_span = -1;  // the run's knot span (RowMaker's key)
     auto flush = [&] {
       if (run_span < 0) return;
       for (int x = 0; x < m; ++x) {
@@ -142,23 +168,25 @@ DataTerms assemble_data(const Surface& s, std::span<const Point3> net, const Ord
     for (std::size_t k = n_points * c / chunks; k < n_points * (c + 1) / chunks; ++k) {
       const double w = weights.empty() ? 1.0 : weights[k];
       if (w == 0.0) continue;
-      const int* idx = own_idx;
-      const double* R = rb.R;
+      const int* idx = own_idx.data();
+      const double* R = own_R.data();
       Vector3 y;
+      int key = 0, len = 0;
       if (rows != nullptr) {
         const std::size_t r = rows->row_of_point[k];
         idx = &rows->idx[r * static_cast<std::size_t>(m)];
         R = &rows->R[r * static_cast<std::size_t>(m)];
         y = rows->y[r];
+        key = rows->key[r];
       } else {
-        y = points[k] - basis_row(s, net, order, params[k], rb, own_idx);
+        y = points[k] - maker(params[k], rb, own_R.data(), own_idx.data(), key, len);
       }
-      if (idx[0] != run_span) {
+      if (key != run_span) {
         flush();
-        run_span = idx[0];
-        std::copy(idx, idx + m, run_idx);
-        std::fill(block, block + m * m, 0.0);
-        std::fill(block_y, block_y + m * 3, 0.0);
+        run_span = key;
+        std::copy(idx, idx + m, run_idx.begin());
+        std::fill(block.begin(), block.end(), 0.0);
+        std::fill(block_y.begin(), block_y.end(), 0.0);
       }
       for (int x = 0; x < m; ++x) {
         const double wx = w * R[x];
@@ -217,8 +245,10 @@ constexpr int kSmoothingBiasPasses = 8;
 // 2 n (b + 1) doubles; a 10 000-point face's 9 trials, 1.2 MB; a million points' finest fits, hundreds).
 constexpr std::size_t kParallelScanBytes = std::size_t{16} << 20;
 
-CvRows cv_rows(const Surface& s, std::span<const Point3> net, const Ordering& order, std::span<const Point3> points,
-               std::span<const SurfaceParameter> params, std::span<const double> weights) {
+CvRows cv_rows(const RowMaker& maker, std::span<const Point3> points, std::span<const SurfaceParameter> params,
+               std::span<const double> weights) {
+  const Surface& s = maker.s;
+  const Ordering& order = maker.order;
   const int p = s.p(), q = s.q();
   const std::size_t n_points = points.size();
   const std::size_t stride = cv_stride(n_points);
@@ -226,7 +256,7 @@ CvRows cv_rows(const Surface& s, std::span<const Point3> net, const Ordering& or
   for (std::size_t k = 0; k < n_points; k += stride) {
     if (weights.empty() || weights[k] != 0.0) chosen.push_back(k);
   }
-  // Each row's place in span order, stably: a counting sort on its span's first unknown (the basis row's idx[0], as
+  // Each row's place in span order, stably: a counting sort on its span's first control point (RowMaker's key, as
   // rational_basis finds the spans), then every row made in parallel at its place.
   std::vector<int> key(chosen.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chosen.size(), 4096), [&](const auto& range) {
@@ -240,24 +270,25 @@ CvRows cv_rows(const Surface& s, std::span<const Point3> net, const Ordering& or
   std::partial_sum(place.begin(), place.end(), place.begin());
   std::vector<std::size_t> to(chosen.size());
   for (std::size_t r = 0; r < chosen.size(); ++r) to[r] = place[static_cast<std::size_t>(key[r])]++;
-  const std::size_t m = static_cast<std::size_t>((p + 1) * (q + 1));
+  const auto m = static_cast<std::size_t>(maker.m);
   CvRows rows;
   rows.m = static_cast<int>(m);
   rows.idx.resize(chosen.size() * m);
   rows.R.resize(chosen.size() * m);
+  rows.key.resize(chosen.size());
+  rows.len.resize(chosen.size());
   rows.y.resize(chosen.size());
   rows.w.resize(chosen.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chosen.size(), 1024), [&](const auto& range) {
     RationalBasis rb;
     for (std::size_t r = range.begin(); r != range.end(); ++r) {
       const std::size_t k = chosen[r], at = to[r];
-      rows.y[at] = points[k] - basis_row(s, net, order, params[k], rb, &rows.idx[at * m]);
-      std::copy(rb.R, rb.R + m, &rows.R[at * m]);
+      rows.y[at] = points[k] - maker(params[k], rb, &rows.R[at * m], &rows.idx[at * m], rows.key[at], rows.len[at]);
       rows.w[at] = weights.empty() ? 1.0 : weights[k];
     }
   });
   for (std::size_t r = 0; r < chosen.size(); ++r) {
-    if (r == 0 || rows.idx[r * m] != rows.idx[(r - 1) * m]) rows.span_starts.push_back(r);
+    if (r == 0 || rows.key[r] != rows.key[r - 1]) rows.span_starts.push_back(r);
   }
   rows.span_starts.push_back(chosen.size());
   if (stride == 1) {
@@ -281,8 +312,8 @@ double leave_one_out_terms(const CvRows& rows, std::size_t first, std::size_t la
   double sum = 0.0;
   for (std::size_t r = first; r < last; ++r) {
     const int* idx = &rows.idx[r * mm];
-    if (idx[0] != span) {
-      span = idx[0];
+    if (rows.key[r] != span) {
+      span = rows.key[r];
       gather_block(Z, b, idx, m, block.data());
       for (int a = 0; a < m; ++a) {
         const std::size_t I = static_cast<std::size_t>(idx[a]);
@@ -328,14 +359,15 @@ double leave_one_out(const CvRows& rows, const std::vector<double>& D, const std
 template <int M>
 double leave_span_out_terms(const CvRows& rows, const std::vector<std::size_t>& starts, std::size_t first,
                             std::size_t last, const std::vector<double>& D, const std::vector<double>& Z, int b) {
-  const int m = rows.m;
-  const std::size_t mm = static_cast<std::size_t>(m);
+  const std::size_t mm = static_cast<std::size_t>(rows.m);
   using Square = Eigen::Matrix<double, M, M>;
-  Square block(m, m), gram(m, m);
-  Eigen::Matrix<double, M, 3> d(m, 3), g(m, 3);
   double sum = 0.0;
   for (std::size_t s = first; s < last; ++s) {
     const std::size_t a = starts[s], e = starts[s + 1];
+    // A THB row's own functions only: its padding repeats an unknown, which would make the block singular.
+    const int m = rows.len[a];
+    Square block(m, m), gram(m, m);
+    Eigen::Matrix<double, M, 3> d(m, 3), g(m, 3);
     const int* idx = &rows.idx[a * mm];
     gather_block(Z, b, idx, m, block.data());
     for (int k = 0; k < m; ++k) {
@@ -431,11 +463,10 @@ Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double 
   return t;
 }
 
-}  // namespace
-
-PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> points,
-                                 std::span<const SurfaceParameter> params, std::span<const double> weights,
-                                 const PenalizedFitOptions& options, std::span<const double> span_weights) {
+// The fit in the tensor space of `start`, or with `thb` in that hierarchical basis (its output surface `start`).
+PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, std::span<const Point3> points,
+                          std::span<const SurfaceParameter> params, std::span<const double> weights,
+                          const PenalizedFitOptions& options, std::span<const double> span_weights) {
   PenalizedFitResult result{.status = PenalizedFitResult::Status::NotDone, .surface = start};
   const std::size_t n_points = points.size();
   if (n_points == 0 || params.size() != n_points || (!weights.empty() && weights.size() != n_points)) return result;
@@ -445,11 +476,20 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     if (!points[k].allFinite() || !inside(dom, params[k]) || !(w >= 0.0) || !std::isfinite(w)) return result;
   }
   const int nu = start.num_u(), nv = start.num_v();
-  const int n = nu * nv;
   const Ordering order(nu, nv);
-  const int b = std::min(order.bandwidth(start.p(), start.q()), n - 1);
-
   const std::vector<Point3> net = cartesian_net(start);
+  const RowMaker maker(start, net, order, thb);
+  const int n = maker.n;
+  const int b = maker.bandwidth();
+  // The penalty is made on the tensor surface's own control points, then (with a hierarchical basis) mapped to its
+  // unknowns: the same energy of the same displacement, as every THB function is a combination of the tensor ones.
+  const int b_tensor = std::min(order.bandwidth(start.p(), start.q()), nu * nv - 1);
+  auto penalty = [&] {
+    ThinPlateTerms t = thin_plate_energy(start, order, b_tensor, span_weights);
+    if (thb == nullptr) return t;
+    return ThinPlateTerms{detail::reduce_band(t.uu, order, *thb, b), detail::reduce_band(t.uv, order, *thb, b),
+                          detail::reduce_band(t.vv, order, *thb, b)};
+  };
   // The penalty's matrix is made side by side with the cross-validation's rows and the data's normal equations, each
   // still in its own fixed order (the same numbers), so that one's serial parts (the rows' counting sort, the sums of
   // the chunks) leave no core idle. Where the rows are every point's (the 10 000-point case), the normal equations
@@ -459,13 +499,11 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   ThinPlateTerms terms;
   CvRows rows;
   if (cv_stride(n_points) == 1) {
-    tbb::parallel_invoke([&] { rows = cv_rows(start, net, order, points, params, weights); },
-                         [&] { terms = thin_plate_energy(start, order, b, span_weights); });
-    data = assemble_data(start, net, order, b, points, params, weights, &rows);
+    tbb::parallel_invoke([&] { rows = cv_rows(maker, points, params, weights); }, [&] { terms = penalty(); });
+    data = assemble_data(maker, b, points, params, weights, &rows);
   } else {
-    tbb::parallel_invoke([&] { data = assemble_data(start, net, order, b, points, params, weights, nullptr); },
-                         [&] { terms = thin_plate_energy(start, order, b, span_weights); },
-                         [&] { rows = cv_rows(start, net, order, points, params, weights); });
+    tbb::parallel_invoke([&] { data = assemble_data(maker, b, points, params, weights, nullptr); },
+                         [&] { terms = penalty(); }, [&] { rows = cv_rows(maker, points, params, weights); });
   }
   if (data.used == 0 || !(data.weight_sum > 0.0)) return result;
   const double data_trace = data.AtWA.trace();
@@ -567,11 +605,27 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   }
   const std::vector<double>& Z = best.Z;
 
+  // The displacement of start's control net, in `order` (a hierarchical basis's mapped through its coefficients).
+  std::vector<double> expanded;
+  if (thb != nullptr) {
+    expanded.assign(static_cast<std::size_t>(nu) * nv * 3, 0.0);
+    for (int i = 0; i < nu; ++i) {
+      for (int j = 0; j < nv; ++j) {
+        const auto J = static_cast<std::size_t>(i * nv + j);
+        const auto I = static_cast<std::size_t>(order.index(i, j));
+        for (int e = thb->first[J]; e < thb->first[J + 1]; ++e) {
+          const auto tau = static_cast<std::size_t>(thb->unknown[static_cast<std::size_t>(e)]);
+          for (std::size_t c = 0; c < 3; ++c) expanded[3 * I + c] += thb->coefficient[static_cast<std::size_t>(e)] * best.D[3 * tau + c];
+        }
+      }
+    }
+  }
+  const std::vector<double>& D_net = thb != nullptr ? expanded : best.D;
   std::vector<HomogeneousPoint> Pw(start.homogeneous());
   for (int i = 0; i < nu; ++i) {
     for (int j = 0; j < nv; ++j) {
       const int I = order.index(i, j);
-      const Vector3 d(best.D[3 * I], best.D[3 * I + 1], best.D[3 * I + 2]);
+      const Vector3 d(D_net[3 * I], D_net[3 * I + 1], D_net[3 * I + 2]);
       if (!d.allFinite()) {
         result.status = PenalizedFitResult::Status::NumericalError;
         return result;
@@ -581,7 +635,7 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     }
   }
   result.surface = Surface(start.U(), start.V(), std::move(Pw));
-  (void)thin_plate_energy(start, order, b, {}, &best.D, &result.span_roughness);
+  (void)thin_plate_energy(start, order, b_tensor, {}, &D_net, &result.span_roughness);
   result.log10_smoothing = best.log10_smoothing;
   result.log10_anisotropy = best.log10_anisotropy;
   result.lambda = best.lambda;
@@ -626,29 +680,29 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
     result.variance_factor.assign(n_points, 0.0);
     result.smoothing_bias.assign(n_points, Vector3::Zero());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_points, 1024), [&](const auto& range) {
-      constexpr int kMaxRow = (nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1);
       RationalBasis rb;
-      int own_idx[kMaxRow];
-      double block[kMaxRow * kMaxRow];
-      int run_span = -1;  // the first unknown (the knot span) of the basis row whose block is gathered
-      const int m = (start.p() + 1) * (start.q() + 1);
+      const int m = maker.m;
+      std::vector<int> own_idx(static_cast<std::size_t>(m));
+      std::vector<double> own_R(static_cast<std::size_t>(m)), block(static_cast<std::size_t>(m * m));
+      int run_span = -1;  // the knot span (RowMaker's key) of the basis row whose block is gathered
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
         // The cross-validation's row where it made one (every point of weight > 0 below 2·kCvPoints points).
-        const int* idx = own_idx;
-        const double* R = rb.R;
+        const int* idx = own_idx.data();
+        const double* R = own_R.data();
+        int key = 0, len = 0;
         if (rows.cover_every_point() && rows.row_of_point[k] != CvRows::kNoRow) {
           const std::size_t r = rows.row_of_point[k];
           idx = &rows.idx[r * static_cast<std::size_t>(m)];
           R = &rows.R[r * static_cast<std::size_t>(m)];
+          key = rows.key[r];
         } else {
-          detail::rational_basis(start, params[k].u, params[k].v, rb);
-          row_unknowns(start, order, rb, own_idx);
+          (void)maker(params[k], rb, own_R.data(), own_idx.data(), key, len);
         }
-        if (idx[0] != run_span) {
-          run_span = idx[0];
-          gather_block(Z, b, idx, m, block);
+        if (key != run_span) {
+          run_span = key;
+          gather_block(Z, b, idx, m, block.data());
         }
-        result.variance_factor[k] = block_quadratic_form(block, R, m);
+        result.variance_factor[k] = block_quadratic_form(block.data(), R, m);
         Vector3 e = Vector3::Zero();
         for (int a = 0; a < m; ++a) {
           const std::size_t I = static_cast<std::size_t>(idx[a]);
@@ -663,6 +717,20 @@ PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> p
   }
   result.status = PenalizedFitResult::Status::OK;
   return result;
+}
+
+}  // namespace
+
+PenalizedFitResult fit_penalized(const Surface& start, std::span<const Point3> points,
+                                 std::span<const SurfaceParameter> params, std::span<const double> weights,
+                                 const PenalizedFitOptions& options, std::span<const double> span_weights) {
+  return fit_on(start, nullptr, points, params, weights, options, span_weights);
+}
+
+PenalizedFitResult fit_penalized(const HierarchicalBasis& basis, std::span<const Point3> points,
+                                 std::span<const SurfaceParameter> params, std::span<const double> weights,
+                                 const PenalizedFitOptions& options, std::span<const double> span_weights) {
+  return fit_on(basis.surface, &basis, points, params, weights, options, span_weights);
 }
 
 std::vector<double> null_statistics(const PenalizedFitResult& fit, int probes,

@@ -31,6 +31,7 @@
 #include <span>
 #include <vector>
 
+#include "probecomp/fitting/hierarchical.hpp"
 #include "probecomp/fitting/least_squares.hpp"
 #include "probecomp/nurbs/surface.hpp"
 
@@ -105,6 +106,15 @@ struct PenalizedFitResult {
 // `span_weights`: the penalty's weight per knot span, span (a, b) at a·(V spans) + b; empty means all 1.
 // Parallel (oneTBB) and deterministic.
 [[nodiscard]] PenalizedFitResult fit_penalized(const nurbs::Surface& start, std::span<const Point3> points,
+                                               std::span<const SurfaceParameter> params,
+                                               std::span<const double> weights = {},
+                                               const PenalizedFitOptions& options = {},
+                                               std::span<const double> span_weights = {});
+
+// The same fit in a hierarchical basis (hierarchical.hpp): the unknowns are its THB functions' displacements, the
+// output is on `basis.surface` (the start refined to the output knots), and `span_weights` are per knot span of that
+// surface; every per-span and per-point result is as above. With no cell refined, the same fit as the tensor one.
+[[nodiscard]] PenalizedFitResult fit_penalized(const HierarchicalBasis& basis, std::span<const Point3> points,
                                                std::span<const SurfaceParameter> params,
                                                std::span<const double> weights = {},
                                                const PenalizedFitOptions& options = {},

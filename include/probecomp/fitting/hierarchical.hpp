@@ -1,0 +1,61 @@
+#pragma once
+// A truncated hierarchical B-spline (THB) space of two levels over a start surface, for local refinement of the
+// penalised fit (issue 48; docs/local-refinement-plan.md). Level 0 is the start's tensor space (degrees p, q,
+// knots U⁰, V⁰, weights w fixed); level 1 halves every span (U¹, V¹). Over a region Ω¹, a union of level-0 cells,
+// the level-1 B-splines whose support lies in Ω¹ are added, and every level-0 B-spline is truncated: its
+// components along those level-1 functions are taken out (Giannelli, Jüttler & Speleers, "THB-splines: the
+// truncated basis for hierarchical splines", CAGD 29, 2012). The functions stay ≥ 0 and sum to 1, and with the
+// start's weights (R_τ = ŵ_τ T_τ / W, ŵ_τ the weight function's coefficient at τ's level) a rational face keeps
+// its weights and its displacement stays in millimetres.
+//
+// Control points are added only where Ω¹ is, not along knot lines across the whole face. Each THB function is
+// held as a combination of the B-splines of one tensor space that contains them all: the start refined to
+// U^out = U⁰ ∪ {level-1 knots inside the u-projection of Ω¹} and V^out likewise. That surface is the fit's output,
+// and exactly (no approximation) the displacement of its control net is the THB one mapped through `coefficient`.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "probecomp/nurbs/surface.hpp"
+
+namespace probecomp::fitting {
+
+struct HierarchicalBasis {
+  // The start refined to U^out, V^out: every THB function is a combination of its rational basis functions R^out_J.
+  nurbs::Surface surface;
+  int unknowns = 0;         // THB functions, in their unknown order (Greville points, the shorter direction inner)
+  int refined_unknowns = 0; // of which level-1 functions
+  // R_τ = Σ_J coefficient · R^out_J: for control point J of `surface` (i·num_v + j), its entries
+  // [first[J], first[J + 1]) of (unknown, coefficient).
+  std::vector<int> first;
+  std::vector<int> unknown;
+  std::vector<double> coefficient;
+  // Per knot span of `surface`, keyed by the span's first control point (i0, j0) = (su − p, sv − q) at
+  // i0·num_v + j0: the THB functions non-zero there, sorted, entries [cell_first[c], cell_first[c + 1]) of
+  // cell_unknowns (empty for a key that starts no span).
+  std::vector<int> cell_first;
+  std::vector<int> cell_unknowns;
+  int bandwidth = 0;        // max over spans of (largest − smallest unknown non-zero there)
+  int max_row = 0;          // max over spans of the number of THB functions non-zero there
+};
+
+// The THB space of `start` refined over the level-0 cells marked in `refine` (span (a, b) of start's breakpoints at
+// a·(V spans) + b; non-zero: refine) grown by `ring` cells all round: a level-1 bicubic needs 2 × 2 level-0 cells
+// inside Ω¹, so without a ring a band of marked cells gains almost nothing. No cell marked: the start's tensor
+// space, with the unknowns in Ordering's order. Throws std::invalid_argument if `refine` has the wrong size.
+[[nodiscard]] HierarchicalBasis hierarchical_basis(const nurbs::Surface& start, std::span<const std::uint8_t> refine,
+                                                   int ring = 1);
+
+// The THB functions non-zero at (u, v) and their values R_τ(u, v), as (unknown, value) pairs in unknown order.
+struct HierarchicalRow {
+  std::vector<int> unknown;
+  std::vector<double> value;
+};
+[[nodiscard]] HierarchicalRow hierarchical_row(const HierarchicalBasis& basis, double u, double v);
+
+// The surface whose control net is `basis.surface`'s moved by the THB displacement D (unknowns × 3, mm, in unknown
+// order): S = S⁰ + Σ_τ R_τ D_τ, exactly.
+[[nodiscard]] nurbs::Surface displaced_surface(const HierarchicalBasis& basis, std::span<const double> D);
+
+}  // namespace probecomp::fitting
