@@ -1,6 +1,7 @@
 // The shape suite of issue 48, scored: a command that prints its own figures, not a timed benchmark.
 //   probecomp_shape_suite [--sigma S] [--case NAME[,NAME…]] [--draw N [--first SEED]] [--no-reference]
 //                         [--plain-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D]
+//                         [--no-local-refinement]
 // Each case of simulation::shape_suite() (or N cases drawn at random from its families, seeds FIRST, FIRST+1, …)
 // is simulated, compensated by the CAD method and scored against the actual part: std, mean and largest error
 // (µm, ok rows), the rows flagged, ±2u coverage overall and in the worst of 6 × 6 regions, the fitted centre
@@ -14,7 +15,8 @@
 // and prints per case the spread of the figures over the draws, each region's coverage averaged over them (what
 // u promises a region on average), and the worst region's coverage had each point's u been its true rms error
 // (over the draws): about what a u without fault would reach in the worst region of one draw. --noise-draw D
-// runs draw D of each case's noise instead of its own (0).
+// runs draw D of each case's noise instead of its own (0). --no-local-refinement fits with
+// fitting::AdaptiveFitOptions::local_refinement off (knot lines only, as before it).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -60,6 +62,7 @@ int main(int argc, char** argv) {
   std::uint64_t first = 1, noise_draw = 0;
   bool reference = true, regions = false, plain_reference = false, stops = false, oracle = false;
   std::vector<std::string> only;
+  compensation::CompensateOptions options;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     auto next = [&]() -> std::string {
@@ -94,10 +97,12 @@ int main(int argc, char** argv) {
       oracle = true;
     } else if (arg == "--seeds") {
       seeds = std::atoi(next().c_str());
+    } else if (arg == "--no-local-refinement") {
+      options.fit.surface.local_refinement = false;
     } else if (arg == "--noise-draw") {
       noise_draw = std::strtoull(next().c_str(), nullptr, 10);
     } else {
-      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D]\n",
+      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D] [--no-local-refinement]\n",
                    argv[0]);
       return 2;
     }
@@ -120,7 +125,7 @@ int main(int argc, char** argv) {
     std::vector<double> std_medians, worst_medians, oracle_medians, region_means;
     for (simulation::ShapeCase c : cases) {
       if (sigma >= 0.0) c.noise_sigma = sigma;
-      const studies::ReplicatedShapeCase r = studies::replicate_shape_case(c, seeds);
+      const studies::ReplicatedShapeCase r = studies::replicate_shape_case(c, seeds, options);
       auto scaled = [](std::vector<double> v, double by) {
         for (double& x : v) x *= by;
         return v;
@@ -156,7 +161,7 @@ int main(int argc, char** argv) {
     std::string features;
     for (const simulation::FeatureSpec& f : c.features) features += (features.empty() ? "" : "; ") + simulation::describe(f);
     try {
-      const studies::ShapeCaseResult s = studies::run_shape_case(c);
+      const studies::ShapeCaseResult s = studies::run_shape_case(c, options);
       r.rows = static_cast<int>(s.plan.size());
       r.std = s.cad_summary.std * 1e3;
       r.mean = s.cad_summary.mean * 1e3;
@@ -191,7 +196,7 @@ int main(int argc, char** argv) {
         for (const double offset : {-1.0, -0.5, -0.25, 0.0, 0.25, 0.5, 1.0}) {
           double std_um = r.std;
           if (offset != 0.0) {
-            compensation::CompensateOptions moved;
+            compensation::CompensateOptions moved = options;
             moved.fit.surface.fit.log10_smoothing_offset = offset;
             std_um = studies::run_shape_case(c, moved).cad_summary.std * 1e3;
           }

@@ -9,6 +9,7 @@
 #include <limits>
 #include <numeric>
 #include <optional>
+#include <cstdlib>
 
 #include "probecomp/fitting/noise_estimate.hpp"
 #include "probecomp/fitting/spans.hpp"
@@ -196,10 +197,17 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   // hat matrix does not describe).
   Surface target = start;
   const LocalPredictionNoise local_noise(points, weights);
+  // With local refinement (AdaptiveFitOptions::local_refinement): the cells of `target` (its knot spans) refined
+  // by one level in a THB basis, and that basis; none marked: the tensor fit on `target`.
+  const bool refine_locally = options.local_refinement && !options.split_only_where_points_either_side &&
+                     options.fit.cross_validation == CrossValidation::LeaveOneOut;
+  std::vector<std::uint8_t> marked;
+  std::optional<HierarchicalBasis> basis;
 
-  // The penalty's weight per knot span (a · V spans + b): lowered where the data show shape the fit misses, so
-  // that the flexibility added there is not smoothed away by a λ that suits the rest of the face, nor spread
-  // over it (knot lines run across the whole face; their new spans elsewhere keep the full penalty).
+  // The penalty's weight per knot span (a · V spans + b) of the surface fitted (target, or the basis's output
+  // surface): lowered where the data show shape the fit misses, so that the flexibility added there is not
+  // smoothed away by a λ that suits the rest of the face, nor spread over it (knot lines run across the whole
+  // face; their new spans elsewhere keep the full penalty).
   std::vector<double> span_weight(static_cast<std::size_t>(target.U().num_spans() * target.V().num_spans()), 1.0);
   PenalizedFitOptions fit_options = options.fit;
   // While refinement is tried (see below): the last fit kept, and its cross-validation score.
@@ -207,8 +215,12 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   std::optional<AdaptiveFitResult> kept;
   double kept_cv = std::numeric_limits<double>::infinity();
   auto undone = [&](const PenalizedFitResult& fit) { return trying && (!fit.ok() || !(fit.cv_score < kept_cv)); };
+  auto fit_once = [&](const PenalizedFitOptions& o) {
+    return basis ? fit_penalized(*basis, points, t, weights, o, span_weight)
+                 : fit_penalized(target, points, t, weights, o, span_weight);
+  };
   for (int round = 0;; ++round) {
-    PenalizedFitResult fit = fit_penalized(target, points, t, weights, fit_options, span_weight);
+    PenalizedFitResult fit = fit_once(fit_options);
     // A round tried (see below) whose fit predicts left-out points no better is undone: judged before the
     // parameter corrections (the points' parameters are those the kept fit was scored with), so that a refinement
     // undone costs one fit, not three, and again after them.
@@ -225,7 +237,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
         near.min_log10_smoothing = std::max(fit_options.min_log10_smoothing, chosen - kCorrectionBracket);
         near.max_log10_smoothing = std::min(fit_options.max_log10_smoothing, chosen + kCorrectionBracket);
       }
-      fit = fit_penalized(target, points, t, weights, near, span_weight);
+      fit = fit_once(near);
     }
     if (undone(fit)) return std::move(*kept);
     if (!fit.ok()) {
@@ -233,7 +245,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
                                                                         : AdaptiveFitResult::Status::NumericalError;
       return result;
     }
-    const int unknowns = target.num_u() * target.num_v();
+    const int unknowns = basis ? basis->unknowns : target.num_u() * target.num_v();
 
     result.surface = fit.surface;
     result.params = t;
@@ -277,8 +289,8 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
 
     // Which spans' residuals the noise does not explain.
     const double sigma = std::max(result.noise_sigma, options.noise_floor);
-    const std::vector<double> bu = target.U().breakpoints();
-    const std::vector<double> bv = target.V().breakpoints();
+    const std::vector<double> bu = fit.surface.U().breakpoints();
+    const std::vector<double> bv = fit.surface.V().breakpoints();
     const std::size_t nsu = bu.size() - 1, nsv = bv.size() - 1;
     std::vector<double> chi2(nsu * nsv, 0.0), sum_r(nsu * nsv, 0.0), sum_free(nsu * nsv, 0.0);
     std::vector<int> count(nsu * nsv, 0);
@@ -367,7 +379,8 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
         }
       });
     }
-    std::vector<char> flag_u(nsu, 0), flag_v(nsv, 0), span_flag(nsu * nsv, 0);
+    // split: a flagged span with points enough to be split (flag_u and flag_v: the knot lines that split it).
+    std::vector<char> flag_u(nsu, 0), flag_v(nsv, 0), span_flag(nsu * nsv, 0), split(nsu * nsv, 0);
     result.spans_above_noise = 0;
     const double alpha = options.false_alarm / static_cast<double>(nsu * nsv);
     for (std::size_t a = 0; a < nsu; ++a) {
@@ -389,6 +402,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
         ++result.spans_above_noise;
         span_flag[s] = 1;
         if (count[s] >= options.min_points_to_split) {
+          split[s] = 1;
           // (See AdaptiveFitOptions::split_only_where_points_either_side; not on exact data, which the penalty's
           // floor holds between the lines, and whose creases between lines need the split: shape suite S29, its
           // worst region's ±2u coverage 94.6 % with it, 66.4 % without.)
@@ -428,7 +442,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
           if (count[s] < options.min_points_to_split || !(chi2[s] > count[s])) continue;
           const Pooled n = pooled(a, b);
           if (!(n.chi2 > n.count)) continue;
-          span_flag[s] = 1;
+          span_flag[s] = split[s] = 1;
           flag_u[a] = 1;
           flag_v[b] = 1;
           trial = true;
@@ -479,23 +493,83 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       span_weight[s] = std::max(span_weight[s] * 0.1, floor);
       lowered = true;
     }
-    std::vector<double> xu = flagged_span_midpoints(bu, flag_u);
-    std::vector<double> xv = flagged_span_midpoints(bv, flag_v);
-    const double after = static_cast<double>(target.num_u() + static_cast<int>(xu.size())) *
-                         static_cast<double>(target.num_v() + static_cast<int>(xv.size()));
-    if (after * (result.noise_sigma <= options.noise_floor ? options.min_points_per_control_point_noise_free
-                                                           : options.min_points_per_control_point) >
-        static_cast<double>(used)) {
-      xu.clear();
-      xv.clear();
+    const double per_control_point = result.noise_sigma <= options.noise_floor
+                                         ? options.min_points_per_control_point_noise_free
+                                         : options.min_points_per_control_point;
+    std::vector<double> xu, xv;
+    bool refined = false;
+    if (!refine_locally) {
+      xu = flagged_span_midpoints(bu, flag_u);
+      xv = flagged_span_midpoints(bv, flag_v);
+      const double after = static_cast<double>(target.num_u() + static_cast<int>(xu.size())) *
+                           static_cast<double>(target.num_v() + static_cast<int>(xv.size()));
+      if (after * per_control_point > static_cast<double>(used)) {
+        xu.clear();
+        xv.clear();
+      }
+      if (!xu.empty()) target = nurbs::refine_knots_u(target, xu);
+      if (!xv.empty()) target = nurbs::refine_knots_v(target, xv);
+      refined = !xu.empty() || !xv.empty();
+    } else {
+      // As above, knot lines through every flagged span; but where the points would not support the control points
+      // they add, the flagged spans' cells of `target` are refined by one level of a THB basis instead, which adds
+      // control points near them only (a cell refined already is split by lines alone). Not on a round tried for
+      // a thin misfit (see above): undone as a whole when its score is no lower, it would take the penalty's
+      // lowering with it.
+      const std::vector<double> tbu = target.U().breakpoints(), tbv = target.V().breakpoints();
+      const std::size_t tsu = tbu.size() - 1, tsv = tbv.size() - 1;
+      if (marked.empty()) marked.assign(tsu * tsv, 0);
+      std::vector<std::uint8_t> grown = marked;
+      std::vector<char> line_u(tsu, 0), line_v(tsv, 0);
+      for (std::size_t s = 0; s < nsu * nsv; ++s) {
+        if (!split[s]) continue;
+        const std::size_t a = s / nsv, b = s % nsv;
+        const auto c0 = static_cast<std::size_t>(span_of(tbu, 0.5 * (bu[a] + bu[a + 1])));
+        const auto c1 = static_cast<std::size_t>(span_of(tbv, 0.5 * (bv[b] + bv[b + 1])));
+        line_u[c0] = line_v[c1] = 1;
+        if (!trial) grown[c0 * tsv + c1] = 1;
+      }
+      for (const bool lines : {true, false}) {
+        const std::vector<double> cu = lines ? flagged_span_midpoints(tbu, line_u) : std::vector<double>{};
+        const std::vector<double> cv = lines ? flagged_span_midpoints(tbv, line_v) : std::vector<double>{};
+        if (lines ? cu.empty() && cv.empty() : grown == marked) continue;
+        Surface next = cu.empty() ? target : nurbs::refine_knots_u(target, cu);
+        if (!cv.empty()) next = nurbs::refine_knots_v(next, cv);
+        // The cells marked so far (and, without lines, the new ones) on next's spans: a cell cut by a line leaves
+        // its mark on both halves.
+        const std::vector<std::uint8_t>& from = lines ? marked : grown;
+        const std::vector<double> nbu = next.U().breakpoints(), nbv = next.V().breakpoints();
+        std::vector<std::uint8_t> cells((nbu.size() - 1) * (nbv.size() - 1));
+        for (std::size_t a = 0; a + 1 < nbu.size(); ++a) {
+          const auto oa = static_cast<std::size_t>(span_of(tbu, 0.5 * (nbu[a] + nbu[a + 1])));
+          for (std::size_t b = 0; b + 1 < nbv.size(); ++b) {
+            const auto ob = static_cast<std::size_t>(span_of(tbv, 0.5 * (nbv[b] + nbv[b + 1])));
+            cells[a * (nbv.size() - 1) + b] = from[oa * tsv + ob];
+          }
+        }
+        std::optional<HierarchicalBasis> candidate;
+        if (std::count(cells.begin(), cells.end(), 1) > 0) {
+          candidate = hierarchical_basis(next, cells, options.local_refinement_ring);
+        }
+        const int count_after = candidate ? candidate->unknowns : next.num_u() * next.num_v();
+        if (static_cast<double>(count_after) * per_control_point > static_cast<double>(used)) continue;
+        xu = cu;
+        xv = cv;
+        target = std::move(next);
+        marked = std::move(cells);
+        basis.reset();
+        if (candidate && candidate->refined_unknowns > 0) basis = std::move(candidate);
+        refined = true;
+        break;
+      }
+      result.refined_cells = static_cast<int>(std::count(marked.begin(), marked.end(), 1));
     }
-    if (xu.empty() && xv.empty() && !lowered) return finish(status_now);
-    if (!xu.empty()) target = nurbs::refine_knots_u(target, xu);
-    if (!xv.empty()) target = nurbs::refine_knots_v(target, xv);
-    // Each new span inherits the weight of the span it was cut from.
-    if (!xu.empty() || !xv.empty()) {
-      const std::vector<double> nbu = target.U().breakpoints();
-      const std::vector<double> nbv = target.V().breakpoints();
+    if (!refined && !lowered) return finish(status_now);
+    // Each new span of the surface fitted next inherits the weight of the span it was cut from.
+    if (refined) {
+      const Surface& next = basis ? basis->surface : target;
+      const std::vector<double> nbu = next.U().breakpoints();
+      const std::vector<double> nbv = next.V().breakpoints();
       std::vector<double> w((nbu.size() - 1) * (nbv.size() - 1));
       for (std::size_t a = 0; a + 1 < nbu.size(); ++a) {
         const std::size_t oa = static_cast<std::size_t>(span_of(bu, 0.5 * (nbu[a] + nbu[a + 1])));

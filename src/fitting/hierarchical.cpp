@@ -62,6 +62,14 @@ std::vector<std::pair<int, int>> supports(const KnotVector& U, const std::vector
   return out;
 }
 
+// The rows [first, last] of column `col` of M that are not zero (first > last: none).
+std::pair<Eigen::Index, Eigen::Index> nonzero_rows(const Eigen::MatrixXd& M, Eigen::Index col) {
+  Eigen::Index first = 0, last = M.rows() - 1;
+  while (first < M.rows() && M(first, col) == 0.0) ++first;
+  while (last >= first && M(last, col) == 0.0) --last;
+  return {first, last};
+}
+
 struct Function {
   int level, i, j;
   double major, minor;  // Greville point at its own level, the band's outer direction first
@@ -95,20 +103,18 @@ HierarchicalBasis hierarchical_basis(const Surface& start, std::span<const std::
   };
   // Level 1 halves every span; the output knots take a span's midpoint where its column (row) meets Ω¹.
   std::vector<double> mid_u, mid_v, out_u, out_v;
-  for (int a = 0; a < nsu; ++a) {
-    const double m = 0.5 * (bu[static_cast<std::size_t>(a)] + bu[static_cast<std::size_t>(a) + 1]);
-    mid_u.push_back(m);
-    bool any = false;
-    for (int b = 0; b < nsv; ++b) any = any || omega[static_cast<std::size_t>(a) * nsv + b];
-    if (any) out_u.push_back(m);
-  }
-  for (int b = 0; b < nsv; ++b) {
-    const double m = 0.5 * (bv[static_cast<std::size_t>(b)] + bv[static_cast<std::size_t>(b) + 1]);
-    mid_v.push_back(m);
-    bool any = false;
-    for (int a = 0; a < nsu; ++a) any = any || omega[static_cast<std::size_t>(a) * nsv + b];
-    if (any) out_v.push_back(m);
-  }
+  auto halve = [&](const std::vector<double>& breaks, bool along_u, std::vector<double>& mid, std::vector<double>& out) {
+    const int n = static_cast<int>(breaks.size()) - 1, across = along_u ? nsv : nsu;
+    for (int a = 0; a < n; ++a) {
+      const double m = 0.5 * (breaks[static_cast<std::size_t>(a)] + breaks[static_cast<std::size_t>(a) + 1]);
+      mid.push_back(m);
+      bool any = false;
+      for (int b = 0; b < across; ++b) any = any || omega[static_cast<std::size_t>(along_u ? a * nsv + b : b * nsv + a)];
+      if (any) out.push_back(m);
+    }
+  };
+  halve(bu, true, mid_u, out_u);
+  halve(bv, false, mid_v, out_v);
   HierarchicalBasis basis{.surface = out_u.empty() ? start : nurbs::refine_knots_v(nurbs::refine_knots_u(start, out_u), out_v)};
   const Surface& S = basis.surface;
   KnotVector U1, V1, Uo, Vo;
@@ -147,10 +153,12 @@ HierarchicalBasis hierarchical_basis(const Surface& start, std::span<const std::
           throw std::logic_error("hierarchical_basis: a level-1 B-spline inside Ω¹ is not in the output space");
         }
         Function f{1, k, l, U1.greville(k), V1.greville(l), level1.weight(k, l), {}};
-        for (int I = 0; I < nou; ++I) {
+        const auto [iu0, iu1] = nonzero_rows(C1u, k);
+        const auto [jv0, jv1] = nonzero_rows(C1v, l);
+        for (Eigen::Index I = iu0; I <= iu1; ++I) {
           if (C1u(I, k) == 0.0) continue;
-          for (int J = 0; J < nov; ++J)
-            if (C1v(J, l) != 0.0) f.out.emplace_back(I * nov + J, C1u(I, k) * C1v(J, l));
+          for (Eigen::Index J = jv0; J <= jv1; ++J)
+            if (C1v(J, l) != 0.0) f.out.emplace_back(static_cast<int>(I) * nov + static_cast<int>(J), C1u(I, k) * C1v(J, l));
         }
         functions.push_back(std::move(f));
       }
@@ -163,17 +171,24 @@ HierarchicalBasis hierarchical_basis(const Surface& start, std::span<const std::
     for (int j = 0; j < n0v; ++j) {
       if (!out_u.empty() && in_omega(sup0u[static_cast<std::size_t>(i)], sup0v[static_cast<std::size_t>(j)])) continue;
       Function f{0, i, j, start.U().greville(i), start.V().greville(j), start.weight(i, j), {}};
-      window = A0ou.col(i) * A0ov.col(j).transpose();  // nou × nov: the B-spline in the output basis
+      // The B-spline in the output basis, over the output rows and columns its support covers (its level-1
+      // children lie inside that support).
+      const auto [iu0, iu1] = nonzero_rows(A0ou, i);
+      const auto [jv0, jv1] = nonzero_rows(A0ov, j);
+      const Eigen::Index ru = iu1 - iu0 + 1, rv = jv1 - jv0 + 1;
+      window = A0ou.col(i).segment(iu0, ru) * A0ov.col(j).segment(jv0, rv).transpose();
       for (int k = 0; k < n1u && !out_u.empty(); ++k) {
         if (A01u(k, i) == 0.0) continue;
         for (int l = 0; l < n1v; ++l) {
           if (A01v(l, j) == 0.0 || !active1[static_cast<std::size_t>(k) * n1v + l]) continue;
-          window -= (A01u(k, i) * A01v(l, j)) * (C1u.col(k) * C1v.col(l).transpose());
+          window -= (A01u(k, i) * A01v(l, j)) * (C1u.col(k).segment(iu0, ru) * C1v.col(l).segment(jv0, rv).transpose());
         }
       }
-      for (int I = 0; I < nou; ++I)
-        for (int J = 0; J < nov; ++J)
-          if (std::abs(window(I, J)) > kZeroCoefficient) f.out.emplace_back(I * nov + J, window(I, J));
+      for (Eigen::Index I = 0; I < ru; ++I)
+        for (Eigen::Index J = 0; J < rv; ++J)
+          if (std::abs(window(I, J)) > kZeroCoefficient) {
+            f.out.emplace_back(static_cast<int>(iu0 + I) * nov + static_cast<int>(jv0 + J), window(I, J));
+          }
       if (!f.out.empty()) functions.push_back(std::move(f));
     }
   }
@@ -250,45 +265,5 @@ nurbs::Surface displaced_surface(const HierarchicalBasis& basis, std::span<const
   }
   return Surface(basis.surface.U(), basis.surface.V(), std::move(Pw));
 }
-
-namespace detail {
-
-Band reduce_band(const Band& tensor, const Ordering& order, const HierarchicalBasis& basis, int b) {
-  Band out(basis.unknowns, b);
-  const int nv = basis.surface.num_v();
-  std::vector<int> control(static_cast<std::size_t>(tensor.n));  // the unknown I of `order` → control point i·nv + j
-  for (int i = 0; i < basis.surface.num_u(); ++i)
-    for (int j = 0; j < nv; ++j) control[static_cast<std::size_t>(order.index(i, j))] = i * nv + j;
-  auto add = [&](int x, int y, double v) {
-    if (x < y) std::swap(x, y);
-    if (x - y > b) throw std::logic_error("reduce_band: two unknowns of one span lie outside the band");
-    out.at(x, y) += v;
-  };
-  for (int I = 0; I < tensor.n; ++I) {
-    const auto cI = static_cast<std::size_t>(control[static_cast<std::size_t>(I)]);
-    for (int J = std::max(0, I - tensor.b); J <= I; ++J) {
-      const double g = tensor.at(I, J);
-      if (g == 0.0) continue;
-      const auto cJ = static_cast<std::size_t>(control[static_cast<std::size_t>(J)]);
-      // Σ over the ordered pairs (I, J) and (J, I) of T_Iτ g T_Jσ into the lower entry of (τ, σ).
-      for (int e = basis.first[cI]; e < basis.first[cI + 1]; ++e) {
-        const int tau = basis.unknown[static_cast<std::size_t>(e)];
-        const double a = basis.coefficient[static_cast<std::size_t>(e)] * g;
-        for (int f = basis.first[cJ]; f < basis.first[cJ + 1]; ++f) {
-          const int sigma = basis.unknown[static_cast<std::size_t>(f)];
-          const double v = a * basis.coefficient[static_cast<std::size_t>(f)];
-          if (I == J) {
-            if (tau >= sigma) add(tau, sigma, v);
-          } else {
-            add(tau, sigma, tau == sigma ? 2.0 * v : v);
-          }
-        }
-      }
-    }
-  }
-  return out;
-}
-
-}  // namespace detail
 
 }  // namespace probecomp::fitting

@@ -6,8 +6,6 @@
 
 #include "probecomp/fitting/hierarchical.hpp"
 
-#include "band.hpp"
-
 namespace probecomp::fitting::detail {
 
 // The THB functions of the span whose first control point is (i0, j0), given the output surface's (p+1)(q+1)
@@ -34,9 +32,5 @@ inline int reduce_row(const HierarchicalBasis& basis, int i0, int j0, const doub
   }
   return m;
 }
-
-// Tᵀ·B·T: a symmetric band matrix over the output surface's control points (numbered by `order`) as one over the
-// basis's unknowns, of half-bandwidth b (≥ basis.bandwidth): the penalty's matrices, made on the tensor surface.
-[[nodiscard]] Band reduce_band(const Band& tensor, const Ordering& order, const HierarchicalBasis& basis, int b);
 
 }  // namespace probecomp::fitting::detail

@@ -481,15 +481,10 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
   const RowMaker maker(start, net, order, thb);
   const int n = maker.n;
   const int b = maker.bandwidth();
-  // The penalty is made on the tensor surface's own control points, then (with a hierarchical basis) mapped to its
-  // unknowns: the same energy of the same displacement, as every THB function is a combination of the tensor ones.
+  // The penalty's spans are the tensor surface's (with a hierarchical basis, its output surface's): each THB function
+  // is one polynomial there. The fitted displacement's roughness is measured on the tensor control net.
   const int b_tensor = std::min(order.bandwidth(start.p(), start.q()), nu * nv - 1);
-  auto penalty = [&] {
-    ThinPlateTerms t = thin_plate_energy(start, order, b_tensor, span_weights);
-    if (thb == nullptr) return t;
-    return ThinPlateTerms{detail::reduce_band(t.uu, order, *thb, b), detail::reduce_band(t.uv, order, *thb, b),
-                          detail::reduce_band(t.vv, order, *thb, b)};
-  };
+  auto penalty = [&] { return thin_plate_energy(start, order, b, span_weights, nullptr, nullptr, thb); };
   // The penalty's matrix is made side by side with the cross-validation's rows and the data's normal equations, each
   // still in its own fixed order (the same numbers), so that one's serial parts (the rows' counting sort, the sums of
   // the chunks) leave no core idle. Where the rows are every point's (the 10 000-point case), the normal equations

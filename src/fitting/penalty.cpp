@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 
+#include "hierarchical_rows.hpp"
 #include "rational_basis.hpp"
 
 namespace probecomp::fitting::detail {
@@ -27,8 +28,9 @@ constexpr std::array<double, 5> kGaussWeights = {0.2369268850561891, 0.478628670
 // With `D` (n × 3, the displacement of the control net) it also writes each span's roughness of that
 // displacement (its energy over the span's area) to `roughness` and builds no matrix.
 ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span<const double> span_weights,
-                                 const std::vector<double>* D, std::vector<double>* roughness) {
-  const int n = s.num_u() * s.num_v();
+                                 const std::vector<double>* D, std::vector<double>* roughness,
+                                 const HierarchicalBasis* thb) {
+  const int n = thb ? thb->unknowns : s.num_u() * s.num_v();
   const int p = s.p(), q = s.q();
   const std::vector<double> bu = s.U().breakpoints();
   const std::vector<double> bv = s.V().breakpoints();
@@ -58,8 +60,11 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
     ThinPlateTerms& G = parts[static_cast<std::size_t>(c)];
     if (!D) G = ThinPlateTerms{Band(n, b), Band(n, b), Band(n, b)};
     RationalBasisD2 d2;
-    int idx[(nurbs::kMaxDegree + 1) * (nurbs::kMaxDegree + 1)];
-    const int m = (p + 1) * (q + 1);
+    const int m_max = thb ? std::max(thb->max_row, (p + 1) * (q + 1)) : (p + 1) * (q + 1);
+    std::vector<int> idx_store(static_cast<std::size_t>(m_max));
+    std::vector<double> uu(static_cast<std::size_t>(m_max)), uv(uu), vv(uu);
+    int* idx = idx_store.data();
+    int m = (p + 1) * (q + 1);
     for (int a = nsu * c / chunks; a < nsu * (c + 1) / chunks; ++a) {
       const double ua = bu[static_cast<std::size_t>(a)], ub = bu[static_cast<std::size_t>(a) + 1];
       const int su = s.U().find_span(0.5 * (ua + ub));
@@ -75,7 +80,20 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
           for (std::size_t gv = 0; gv < kGaussNodes.size(); ++gv) {
             const double v = 0.5 * (va + vb) + 0.5 * (vb - va) * kGaussNodes[gv];
             detail::rational_basis_d2(s, su, sv, u, v, d2);
-            for (int k = 0; k < m; ++k) idx[k] = order.index(d2.i0 + k / (q + 1), d2.j0 + k % (q + 1));
+            const double* Ruu = d2.Ruu;
+            const double* Ruv = d2.Ruv;
+            const double* Rvv = d2.Rvv;
+            if (thb && !D) {
+              // The hierarchical functions' second derivatives: the same combinations of the tensor ones.
+              m = reduce_row(*thb, d2.i0, d2.j0, d2.Ruu, uu.data(), idx);
+              (void)reduce_row(*thb, d2.i0, d2.j0, d2.Ruv, uv.data(), idx);
+              (void)reduce_row(*thb, d2.i0, d2.j0, d2.Rvv, vv.data(), idx);
+              Ruu = uu.data();
+              Ruv = uv.data();
+              Rvv = vv.data();
+            } else {
+              for (int k = 0; k < m; ++k) idx[k] = order.index(d2.i0 + k / (q + 1), d2.j0 + k % (q + 1));
+            }
             const double w = jac * kGaussWeights[gu] * kGaussWeights[gv];
             if (D) {
               Vector3 duu = Vector3::Zero(), duv = Vector3::Zero(), dvv = Vector3::Zero();
@@ -88,9 +106,9 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
               energy += w * (cuu * duu.squaredNorm() + cuv * duv.squaredNorm() + cvv * dvv.squaredNorm());
               continue;
             }
-            G.uu.add_outer(idx, d2.Ruu, m, w * cuu);
-            G.uv.add_outer(idx, d2.Ruv, m, w * cuv);
-            G.vv.add_outer(idx, d2.Rvv, m, w * cvv);
+            G.uu.add_outer(idx, Ruu, m, w * cuu);
+            G.uv.add_outer(idx, Ruv, m, w * cuv);
+            G.vv.add_outer(idx, Rvv, m, w * cvv);
           }
         }
         // The span's area in mm²: its parameter area times Lu·Lv (jac holds a quarter of the parameter area).

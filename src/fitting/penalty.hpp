@@ -9,6 +9,10 @@
 
 #include "band.hpp"
 
+namespace probecomp::fitting {
+struct HierarchicalBasis;
+}
+
 namespace probecomp::fitting::detail {
 
 // The thin-plate energy's three terms, each a band matrix: G(θ) = θ·G_ss + G_st + G_tt/θ (θ = 1: the isotropic
@@ -25,9 +29,10 @@ struct ThinPlateTerms {
 };
 
 // The thin-plate energy's three terms for the unknowns in `order` (half-bandwidth b), each span weighted by
-// span_weights (none: 1); with `D`, each span's roughness of D in `roughness` instead (penalty.cpp).
+// span_weights (none: 1); with `D`, each span's roughness of D in `roughness` instead (penalty.cpp). With `thb`
+// (s its output surface), the terms are for its unknowns instead: each basis row mapped to them (hierarchical.hpp).
 ThinPlateTerms thin_plate_energy(const nurbs::Surface& s, const Ordering& order, int b,
                                  std::span<const double> span_weights, const std::vector<double>* D = nullptr,
-                                 std::vector<double>* roughness = nullptr);
+                                 std::vector<double>* roughness = nullptr, const HierarchicalBasis* thb = nullptr);
 
 }  // namespace probecomp::fitting::detail

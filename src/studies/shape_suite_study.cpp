@@ -100,7 +100,7 @@ ShapeCaseResult run_shape_case(const simulation::ShapeCase& c, const compensatio
   return out;
 }
 
-ReplicatedShapeCase replicate_shape_case(simulation::ShapeCase c, int draws) {
+ReplicatedShapeCase replicate_shape_case(simulation::ShapeCase c, int draws, const compensation::CompensateOptions& options) {
   ReplicatedShapeCase out;
   std::vector<std::vector<double>> error;  // per draw, per row (NaN where not ok)
   std::vector<int> region;
@@ -108,7 +108,7 @@ ReplicatedShapeCase replicate_shape_case(simulation::ShapeCase c, int draws) {
   std::array<int, std::tuple_size_v<RegionShares>> scored{};
   for (int d = 0; d < draws; ++d) {
     c.noise_draw = static_cast<std::uint64_t>(d);
-    ShapeCaseResult s = run_shape_case(c);
+    ShapeCaseResult s = run_shape_case(c, options);
     out.stds.push_back(s.cad_summary.std);
     out.coverages.push_back(s.coverage_2u);
     out.worst_regions.push_back(s.worst_region_coverage_2u);

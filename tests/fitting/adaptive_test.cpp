@@ -10,6 +10,8 @@
 #include <random>
 
 #include "probecomp/nurbs/closest_point.hpp"
+#include "probecomp/nurbs/constructors.hpp"
+#include "support/light.hpp"
 #include "support/test_surfaces.hpp"
 
 namespace probecomp::fitting {
@@ -178,6 +180,57 @@ TEST(FitSurface, SparseDataStopRefinementAndSaySo) {
   const AdaptiveFitResult fit = fit_surface(part.nominal, data.points, data.params, {}, options);
   EXPECT_NE(fit.status, AdaptiveFitResult::Status::NotDone);
   EXPECT_LE(fit.control_points * options.min_points_per_control_point, 900.0);
+}
+
+// A crease across a plane (the shape suite's smoothed step: 0.2 mm over 1 mm at 45°), sampled on a 1 mm grid with
+// σ = 3 µm: knot lines through every span it crosses cover the whole face, and soon the points support no more of
+// them. Local refinement (AdaptiveFitOptions::local_refinement) then goes on near the crease alone. Errors against
+// the closed form, in the band |s| < 3 mm about the crease and outside it.
+TEST(FitSurface, WhereThePointsSupportNoMoreKnotLinesACreaseIsRefinedLocally) {
+  const Surface start = nurbs::make_plane_patch(Point3(0, 0, 0), Vector3(50, 0, 0), Vector3(0, 50, 0), 3, 3, 5, 5);
+  auto crease = [](double x, double y) { return 0.1 * (1.0 + std::tanh(2.0 * (x - y) / std::sqrt(2.0))); };
+  for (const std::uint64_t seed : test::cases<std::uint64_t>({7, 8})) {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> noise(0.0, 0.003);
+    Data d;
+    for (int a = 0; a <= 50; ++a) {
+      for (int b = 0; b <= 50; ++b) {
+        d.params.push_back({a / 50.0, b / 50.0});
+        d.points.emplace_back(a, b, crease(a, b) + noise(rng));
+      }
+    }
+    struct Errors {
+      double band = 0.0, outside = 0.0;  // rms, µm
+    };
+    auto errors = [&](const AdaptiveFitResult& fit) {
+      double band = 0, outside = 0;
+      int nb = 0, no = 0;
+      for (int a = 0; a <= 200; ++a) {
+        for (int b = 0; b <= 200; ++b) {
+          const Point3 S = nurbs::evaluate(fit.surface, a / 200.0, b / 200.0);
+          const double e = 1e3 * std::abs(S.z() - crease(S.x(), S.y()));
+          const bool in_band = std::abs(S.x() - S.y()) / std::sqrt(2.0) < 3.0;
+          (in_band ? band : outside) += e * e;
+          ++(in_band ? nb : no);
+        }
+      }
+      return Errors{std::sqrt(band / nb), std::sqrt(outside / no)};
+    };
+    AdaptiveFitOptions lines;
+    lines.local_refinement = false;
+    const AdaptiveFitResult a = fit_surface(start, d.points, d.params, {}, lines);
+    const AdaptiveFitResult b = fit_surface(start, d.points, d.params, {}, AdaptiveFitOptions{});
+    ASSERT_TRUE(a.fitted() && b.fitted());
+    const Errors ea = errors(a), eb = errors(b);
+    std::printf("seed %d: band rms %.2f -> %.2f um, outside %.2f -> %.2f um; %d -> %d control points, %d cells refined\n",
+                static_cast<int>(seed), ea.band, eb.band, ea.outside, eb.outside, a.control_points, b.control_points,
+                b.refined_cells);
+    EXPECT_EQ(a.refined_cells, 0);
+    EXPECT_GT(b.refined_cells, 0);
+    EXPECT_LE(2.0 * b.control_points, static_cast<int>(d.points.size()));
+    EXPECT_LE(eb.band, 0.7 * ea.band);
+    EXPECT_LE(eb.outside, 1.05 * ea.outside);
+  }
 }
 
 TEST(RobustNoiseSigma, IgnoresAMinorityOfLargeResiduals) {

@@ -55,6 +55,7 @@ struct ReplicatedShapeCase {
   // The lowest over regions scored in every draw of the region's coverage averaged over the draws (NaN if none).
   double lowest_region_mean = std::numeric_limits<double>::quiet_NaN();
 };
-[[nodiscard]] ReplicatedShapeCase replicate_shape_case(simulation::ShapeCase c, int draws);
+[[nodiscard]] ReplicatedShapeCase replicate_shape_case(simulation::ShapeCase c, int draws,
+                                                       const compensation::CompensateOptions& options = {});
 
 }  // namespace probecomp::studies
