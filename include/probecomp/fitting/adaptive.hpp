@@ -67,12 +67,15 @@ struct AdaptiveFitOptions {
   // (the rule above), refine the flagged spans' cells by one level of a THB basis (fitting/hierarchical.hpp)
   // instead: control points near them only, none along the rest of their lines. Grids and random points only (not
   // on a scanning probe's lines, where a cell between lines would hold no points). Measured (probecomp_shape_suite
-  // --no-reference): of the suite's 30 cases and 120 unseen draws, it changes 3, those whose refinement the points'
-  // support or the rounds stopped: S11 7.24 -> 3.02 µm, S26 1.469 -> 1.132 µm, D906 3.61 -> 2.05 µm; the rest are
-  // the same to the last digit. `local_refinement_ring`: cells all round a flagged one refined with it (a level-1
-  // bicubic needs 2 × 2 cells inside the refined region, so a lone cell alone gains almost nothing).
+  // --no-reference): of the suite's 30 cases and 120 unseen draws it changes 3, those whose refinement the points'
+  // support or the rounds stopped: S11 7.24 -> 2.75 µm, S26 1.469 -> 1.112 µm, D906 3.61 -> 1.80 µm; the rest
+  // print the same to the last digit.
   bool local_refinement = true;
-  int local_refinement_ring = 1;
+  // Cells all round a flagged one refined with it: a level-1 bicubic needs 2 × 2 cells inside the refined region,
+  // so a lone cell gains almost nothing. On those three cases, one cell all round: 3.02, 1.132 and 2.05 µm; two:
+  // 2.75, 1.112 and 1.80 µm; three: 2.14, 1.164 and 3.61 µm (D906's cells then need more control points than its
+  // points support, and it falls back to lines).
+  int local_refinement_ring = 2;
 };
 
 // Fewer points than this around a point (its span and the eight around it) give no median worth the name: their
