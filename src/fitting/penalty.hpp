@@ -29,8 +29,9 @@ struct ThinPlateTerms {
 };
 
 // The thin-plate energy's three terms for the unknowns in `order` (half-bandwidth b), each span weighted by
-// span_weights (none: 1); with `D`, each span's roughness of D in `roughness` instead (penalty.cpp). With `thb`
-// (s its output surface), the terms are for its unknowns instead: each basis row mapped to them (hierarchical.hpp).
+// span_weights (none: 1); with `D`, each span's roughness of D in `roughness` instead (penalty.cpp; D on s's own
+// control net, in `order`). With `thb` (s its output surface), the terms are for the THB unknowns instead: each
+// basis row mapped to them (hierarchical.hpp).
 ThinPlateTerms thin_plate_energy(const nurbs::Surface& s, const Ordering& order, int b,
                                  std::span<const double> span_weights, const std::vector<double>* D = nullptr,
                                  std::vector<double>* roughness = nullptr, const HierarchicalBasis* thb = nullptr);
