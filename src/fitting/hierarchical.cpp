@@ -253,16 +253,21 @@ HierarchicalRow hierarchical_row(const HierarchicalBasis& basis, double u, doubl
   return row;
 }
 
-nurbs::Surface displaced_surface(const HierarchicalBasis& basis, std::span<const double> D) {
-  std::vector<HomogeneousPoint> Pw(basis.surface.homogeneous());
-  for (std::size_t J = 0; J < Pw.size(); ++J) {
-    Vector3 d = Vector3::Zero();
+std::vector<Vector3> control_net_displacement(const HierarchicalBasis& basis, std::span<const double> D) {
+  std::vector<Vector3> out(basis.first.size() - 1, Vector3::Zero());
+  for (std::size_t J = 0; J < out.size(); ++J) {
     for (int e = basis.first[J]; e < basis.first[J + 1]; ++e) {
       const auto tau = static_cast<std::size_t>(basis.unknown[static_cast<std::size_t>(e)]);
-      d += basis.coefficient[static_cast<std::size_t>(e)] * Vector3(D[3 * tau], D[3 * tau + 1], D[3 * tau + 2]);
+      out[J] += basis.coefficient[static_cast<std::size_t>(e)] * Vector3(D[3 * tau], D[3 * tau + 1], D[3 * tau + 2]);
     }
-    Pw[J].head<3>() += Pw[J].w() * d;
   }
+  return out;
+}
+
+nurbs::Surface to_nurbs(const HierarchicalBasis& basis, std::span<const double> D) {
+  std::vector<HomogeneousPoint> Pw(basis.surface.homogeneous());
+  const std::vector<Vector3> d = control_net_displacement(basis, D);
+  for (std::size_t J = 0; J < Pw.size(); ++J) Pw[J].head<3>() += Pw[J].w() * d[J];
   return Surface(basis.surface.U(), basis.surface.V(), std::move(Pw));
 }
 

@@ -603,15 +603,12 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
   // The displacement of start's control net, in `order` (a hierarchical basis's mapped through its coefficients).
   std::vector<double> expanded;
   if (thb != nullptr) {
-    expanded.assign(static_cast<std::size_t>(nu) * nv * 3, 0.0);
+    const std::vector<Vector3> net_d = control_net_displacement(*thb, best.D);
+    expanded.resize(static_cast<std::size_t>(nu) * nv * 3);
     for (int i = 0; i < nu; ++i) {
       for (int j = 0; j < nv; ++j) {
-        const auto J = static_cast<std::size_t>(i * nv + j);
         const auto I = static_cast<std::size_t>(order.index(i, j));
-        for (int e = thb->first[J]; e < thb->first[J + 1]; ++e) {
-          const auto tau = static_cast<std::size_t>(thb->unknown[static_cast<std::size_t>(e)]);
-          for (std::size_t c = 0; c < 3; ++c) expanded[3 * I + c] += thb->coefficient[static_cast<std::size_t>(e)] * best.D[3 * tau + c];
-        }
+        for (int c = 0; c < 3; ++c) expanded[3 * I + static_cast<std::size_t>(c)] = net_d[static_cast<std::size_t>(i) * nv + j][c];
       }
     }
   }

@@ -161,14 +161,14 @@ TEST(HierarchicalBasis, HoldsTheStartsSpaceAndALevelOneBumpInsideTheRefinedCells
   }
 }
 
-TEST(HierarchicalBasis, ItsDisplacedSurfaceIsTheSumOfItsFunctions) {
+TEST(HierarchicalBasis, ItsNurbsFormIsTheSumOfItsFunctions) {
   const Surface s = with_spans(surfaces()[0]);
   const HierarchicalBasis basis = hierarchical_basis(s, diagonal_band(s), 2);
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> d(-0.1, 0.1);
   std::vector<double> D(static_cast<std::size_t>(basis.unknowns) * 3);
   for (double& x : D) x = d(rng);
-  const Surface out = displaced_surface(basis, D);
+  const Surface out = to_nurbs(basis, D);
   double worst = 0.0;
   for (const auto& t : random_thb_parameters(s, 10000, 8)) {
     const HierarchicalRow row = hierarchical_row(basis, t.u, t.v);

@@ -54,8 +54,11 @@ struct HierarchicalRow {
 };
 [[nodiscard]] HierarchicalRow hierarchical_row(const HierarchicalBasis& basis, double u, double v);
 
-// The surface whose control net is `basis.surface`'s moved by the THB displacement D (unknowns × 3, mm, in unknown
-// order): S = S⁰ + Σ_τ R_τ D_τ, exactly.
-[[nodiscard]] nurbs::Surface displaced_surface(const HierarchicalBasis& basis, std::span<const double> D);
+// The displacement of each of `basis.surface`'s control points (i·num_v + j, mm) that the THB displacement D makes
+// (unknowns × 3, mm, in unknown order): Σ_τ coefficient · D_τ.
+[[nodiscard]] std::vector<Vector3> control_net_displacement(const HierarchicalBasis& basis, std::span<const double> D);
+
+// The surface whose control net is `basis.surface`'s moved by that displacement: S = S⁰ + Σ_τ R_τ D_τ, exactly.
+[[nodiscard]] nurbs::Surface to_nurbs(const HierarchicalBasis& basis, std::span<const double> D);
 
 }  // namespace probecomp::fitting
