@@ -9,7 +9,6 @@
 #include <limits>
 #include <numeric>
 #include <optional>
-#include <cstdlib>
 
 #include "probecomp/fitting/noise_estimate.hpp"
 #include "probecomp/fitting/spans.hpp"

@@ -117,9 +117,9 @@ HierarchicalBasis hierarchical_basis(const Surface& start, std::span<const std::
   halve(bv, false, mid_v, out_v);
   HierarchicalBasis basis{.surface = out_u.empty() ? start : nurbs::refine_knots_v(nurbs::refine_knots_u(start, out_u), out_v)};
   const Surface& S = basis.surface;
-  KnotVector U1, V1, Uo, Vo;
+  KnotVector U1, V1;
   const Eigen::MatrixXd A01u = insertion_matrix(start.U(), mid_u, &U1), A01v = insertion_matrix(start.V(), mid_v, &V1);
-  const Eigen::MatrixXd A0ou = insertion_matrix(start.U(), out_u, &Uo), A0ov = insertion_matrix(start.V(), out_v, &Vo);
+  const Eigen::MatrixXd A0ou = insertion_matrix(start.U(), out_u), A0ov = insertion_matrix(start.V(), out_v);
   // Level-1 B-splines in the output basis: solve A_out→1 c = e_k (consistent where the B-spline's knots are all
   // output knots, which holds for every one whose support lies in Ω¹: the only ones used).
   auto level1_in_out = [&](const KnotVector& Uout, const KnotVector& Ul1) {
@@ -131,8 +131,8 @@ HierarchicalBasis hierarchical_basis(const Surface& start, std::span<const std::
     C = C.unaryExpr([](double x) { return std::abs(x) < kZeroCoefficient ? 0.0 : x; });
     return std::pair{C, A};
   };
-  const auto [C1u, Aou1] = level1_in_out(Uo, U1);
-  const auto [C1v, Aov1] = level1_in_out(Vo, V1);
+  const auto [C1u, Aou1] = level1_in_out(S.U(), U1);
+  const auto [C1v, Aov1] = level1_in_out(S.V(), V1);
   const auto sup0u = supports(start.U(), bu), sup0v = supports(start.V(), bv);
   const auto sup1u = supports(U1, bu), sup1v = supports(V1, bv);
   const int n0u = start.num_u(), n0v = start.num_v(), n1u = U1.num_basis(), n1v = V1.num_basis();

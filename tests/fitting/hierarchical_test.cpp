@@ -33,13 +33,9 @@ std::vector<std::uint8_t> diagonal_band(const Surface& s) {
   return marked;
 }
 
+// n parameters uniform on s's domain (the samples' own, without noise).
 std::vector<fitting::SurfaceParameter> random_thb_parameters(const Surface& s, int n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  const nurbs::Domain d = s.domain();
-  std::uniform_real_distribution<double> U(d.u0, d.u1), V(d.v0, d.v1);
-  std::vector<fitting::SurfaceParameter> t(static_cast<std::size_t>(n));
-  for (auto& x : t) x = {U(rng), V(rng)};
-  return t;
+  return testing::sample_surface(s, static_cast<std::size_t>(n), 0.0, seed, testing::Noise::Isotropic).params;
 }
 
 // The surfaces of the test: rational with repeated knots, a polynomial panel, a rational cylinder section.
