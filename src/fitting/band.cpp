@@ -15,7 +15,7 @@ bool cholesky(Band& L) {
   const int b = L.b;
   const std::size_t stride = static_cast<std::size_t>(b) + 1;
   for (int I = 0; I < L.n; ++I) {
-    const int m0 = std::max(0, I - b);
+    const int m0 = L.row_start(I);
     double* rowI = &L.a[static_cast<std::size_t>(I) * stride + static_cast<std::size_t>(m0 - I + b)];  // L_I,m0+t
     const int width = I - m0;
     for (int t = 0; t < width; ++t) {
@@ -34,20 +34,40 @@ bool cholesky(Band& L) {
   return true;
 }
 
+namespace {
+
+// The last row of each column of L that may be non-zero: max {k : first[k] ≤ i}, or i + b without an envelope.
+std::vector<int> column_ends(const Band& L) {
+  std::vector<int> last(static_cast<std::size_t>(L.n));
+  int k = 0;
+  for (int i = 0; i < L.n; ++i) {
+    if (L.first.empty()) {
+      last[static_cast<std::size_t>(i)] = std::min(L.n - 1, i + L.b);
+      continue;
+    }
+    while (k + 1 < L.n && L.first[static_cast<std::size_t>(k) + 1] <= i) ++k;
+    last[static_cast<std::size_t>(i)] = std::max(k, i);
+  }
+  return last;
+}
+
+}  // namespace
+
 // x = (L·Lᵀ)⁻¹ r for the three columns of r (n × 3, row major), in place.
 void solve(const Band& L, std::vector<double>& r) {
-  const int n = L.n, b = L.b;
+  const int n = L.n;
   for (int I = 0; I < n; ++I) {
     for (int c = 0; c < 3; ++c) {
       double s = r[3 * I + c];
-      for (int m = std::max(0, I - b); m < I; ++m) s -= L.at(I, m) * r[3 * m + c];
+      for (int m = L.row_start(I); m < I; ++m) s -= L.at(I, m) * r[3 * m + c];
       r[3 * I + c] = s / L.at(I, I);
     }
   }
+  const std::vector<int> last = column_ends(L);
   for (int I = n - 1; I >= 0; --I) {
     for (int c = 0; c < 3; ++c) {
       double s = r[3 * I + c];
-      for (int k = I + 1; k <= std::min(n - 1, I + b); ++k) s -= L.at(k, I) * r[3 * k + c];
+      for (int k = I + 1; k <= last[static_cast<std::size_t>(I)]; ++k) s -= L.at(k, I) * r[3 * k + c];
       r[3 * I + c] = s / L.at(I, I);
     }
   }
@@ -68,8 +88,9 @@ std::vector<double> band_inverse(const Band& L) {
   std::vector<double> ring(stride * stride, 0.0);
   auto ring_row = [&](int k) { return &ring[static_cast<std::size_t>(k % (b + 1)) * stride]; };
   std::vector<double> column(stride), sum(stride);
+  const std::vector<int> ends = column_ends(L);
   for (int i = n - 1; i >= 0; --i) {
-    const int last = std::min(n - 1, i + b);
+    const int last = ends[static_cast<std::size_t>(i)];
     const int width = last - i;
     for (int k = i + 1; k <= last; ++k) column[static_cast<std::size_t>(k - i)] = L.at(k, i);
     const double d = L.at(i, i);

@@ -23,11 +23,19 @@ struct Ordering {
 
 // A symmetric band matrix of order n and half-bandwidth b, its lower half by rows: (I, J), I − b ≤ J ≤ I, at
 // a[I·(b+1) + J − I + b]. Rows are contiguous, so the factorisation's inner products run over contiguous memory.
+// `first`, when not empty, is its envelope (a variable band): row I is zero left of column first[I] (≥ I − b,
+// non-decreasing in I). The Cholesky factor keeps no fill outside an envelope (Jennings 1966), and the inverse's
+// entries inside it are found from those alone (Takahashi's recurrence reads Z_kj only for k, j inside), so the
+// factor, the solves and band_inverse skip what lies outside: a THB basis's rows are narrower than its widest
+// (docs/performance.md). The same numbers as without it, bit for bit; band_inverse then leaves Z zero outside.
 struct Band {
   int n = 0, b = 0;
   std::vector<double> a;
+  std::vector<int> first;
   Band() = default;
   Band(int n_, int b_) : n(n_), b(b_), a(static_cast<std::size_t>(n_) * static_cast<std::size_t>(b_ + 1), 0.0) {}
+  // The first column of row I that may be non-zero.
+  [[nodiscard]] int row_start(int I) const { return first.empty() ? std::max(0, I - b) : first[static_cast<std::size_t>(I)]; }
   [[nodiscard]] double& at(int I, int J) { return a[static_cast<std::size_t>(I) * (b + 1) + (J - I + b)]; }
   [[nodiscard]] double at(int I, int J) const { return a[static_cast<std::size_t>(I) * (b + 1) + (J - I + b)]; }
   // += scale · v vᵀ over the unknowns idx[0..m).
@@ -54,7 +62,8 @@ struct Band {
 bool cholesky(Band& L);
 // x = (L·Lᵀ)⁻¹ r for the three columns of r (n × 3, row major), in place.
 void solve(const Band& L, std::vector<double>& r);
-// The entries of (L·Lᵀ)⁻¹ inside the band, upper half by rows: Z(i, j), i ≤ j ≤ i + b, at z[i·(b+1) + j − i].
+// The entries of (L·Lᵀ)⁻¹ inside the band (inside L's envelope where it has one: zero elsewhere), upper half by
+// rows: Z(i, j), i ≤ j ≤ i + b, at z[i·(b+1) + j − i].
 std::vector<double> band_inverse(const Band& L);
 
 // rᵀ·Z·r over the unknowns idx[0..m) (all within the band of each other), Z in band_inverse's layout, in two steps

@@ -14,7 +14,8 @@
 
 #include "assembly.hpp"
 #include "band.hpp"
-#include "hierarchical_rows.hpp"
+#include "basis_rows.hpp"
+#include "cross_validation.hpp"
 #include "penalty.hpp"
 #include "rational_basis.hpp"
 
@@ -25,8 +26,16 @@ namespace {
 using detail::RationalBasis;
 using nurbs::Surface;
 
-// The band algebra is in band.cpp, the thin-plate penalty in penalty.cpp.
+// The band algebra is in band.cpp, the thin-plate penalty in penalty.cpp, the cross-validation in
+// cross_validation.cpp.
 using detail::Band;
+using detail::CvRows;
+using detail::RowMaker;
+using detail::cartesian_net;
+using detail::cv_rows;
+using detail::cv_stride;
+using detail::leave_one_out;
+using detail::leave_span_out;
 using detail::Ordering;
 using detail::ThinPlateTerms;
 using detail::band_inverse;
@@ -37,92 +46,6 @@ using detail::cholesky;
 using detail::gather_block;
 using detail::solve;
 using detail::thin_plate_energy;
-
-// The unknown each of rb's basis functions multiplies, in idx.
-void row_unknowns(const Surface& s, const Ordering& order, const RationalBasis& rb, int* idx) {
-  const int p = s.p(), q = s.q();
-  for (int i = 0; i <= p; ++i)
-    for (int j = 0; j <= q; ++j) idx[i * (q + 1) + j] = order.index(rb.i0 + i, rb.j0 + j);
-}
-
-// The start surface's control points in Cartesian form, row i (u) major: made once per fit for every basis row,
-// which would otherwise divide each of its (p+1)(q+1) homogeneous points by its weight again.
-std::vector<Point3> cartesian_net(const Surface& s) {
-  std::vector<Point3> net(static_cast<std::size_t>(s.num_u()) * static_cast<std::size_t>(s.num_v()));
-  for (int i = 0; i < s.num_u(); ++i)
-    for (int j = 0; j < s.num_v(); ++j) net[static_cast<std::size_t>(i) * s.num_v() + j] = s.control_point(i, j);
-  return net;
-}
-
-// A point's basis row: the fitted functions non-zero at t, their values and unknowns. Those are the surface s's
-// rational basis functions, or with a hierarchical basis (hierarchical.hpp, s its output surface) the THB
-// functions reduced from them. Rows are `m` long: a THB row shorter than that is padded with zero values on its
-// last unknown, which add nothing to any sum, and `len` says how many are its own. `key` names t's knot span of s
-// (its first control point's index in `order`): rows with one key have the same unknowns.
-struct RowMaker {
-  const Surface& s;
-  std::span<const Point3> net;  // cartesian_net(s)
-  const Ordering& order;        // of s's control points
-  const HierarchicalBasis* thb = nullptr;
-  int n = 0;  // unknowns
-  int m = 0;  // row length
-  RowMaker(const Surface& s_, std::span<const Point3> net_, const Ordering& order_, const HierarchicalBasis* thb_)
-      : s(s_), net(net_), order(order_), thb(thb_), n(thb_ ? thb_->unknowns : s_.num_u() * s_.num_v()),
-        m(thb_ ? thb_->max_row : (s_.p() + 1) * (s_.q() + 1)) {}
-  [[nodiscard]] int bandwidth() const {
-    return std::min(thb ? thb->bandwidth : order.bandwidth(s.p(), s.q()), n - 1);
-  }
-  // The row at t in R, idx, key and len; returns the start surface's point S⁰(t), which every use of a row needs.
-  Vector3 operator()(const SurfaceParameter& t, RationalBasis& rb, double* R, int* idx, int& key, int& len) const {
-    detail::rational_basis(s, t.u, t.v, rb);
-    const int p = s.p(), q = s.q();
-    Vector3 S0 = Vector3::Zero();
-    for (int i = 0; i <= p; ++i) {
-      const Point3* row = &net[static_cast<std::size_t>(rb.i0 + i) * s.num_v() + rb.j0];
-      for (int j = 0; j <= q; ++j) S0 += rb.R[i * (q + 1) + j] * row[j];
-    }
-    key = order.index(rb.i0, rb.j0);
-    if (thb == nullptr) {
-      row_unknowns(s, order, rb, idx);
-      std::copy(rb.R, rb.R + m, R);
-      len = m;
-    } else {
-      len = detail::reduce_row(*thb, rb.i0, rb.j0, rb.R, R, idx);
-      std::fill(R + len, R + m, 0.0);
-      std::fill(idx + len, idx + m, idx[len - 1]);
-    }
-    return S0;
-  }
-};
-
-// Points the cross-validation score is summed over at most.
-constexpr std::size_t kCvPoints = 16384;
-// The cross-validation takes every stride-th point: every point below 2·kCvPoints.
-std::size_t cv_stride(std::size_t n_points) { return std::max<std::size_t>(1, n_points / kCvPoints); }
-
-// The points the leave-one-out score is summed over, each with its basis row (the nonzero R_I and their unknowns)
-// and its offset from the start surface, y_k = x_k − S⁰(u_k, v_k): made once per fit, used by every trial λ.
-// Above kCvPoints points, every stride-th point (in input order, so the same points for every λ): each term is
-// exact for its point, so the sum over the sample estimates the whole sum without bias, at a bounded cost.
-// The rows are ordered by knot span (stably: the same order for any thread count), so that each trial reads the
-// band inverse once per span, not once per point.
-struct CvRows {
-  int m = 0;                 // basis functions per row (RowMaker::m)
-  std::vector<int> idx;      // m per row
-  std::vector<double> R;     // m per row
-  std::vector<int> key;      // one per row: its knot span (RowMaker)
-  std::vector<int> len;      // one per row: its own functions, the first len of its m
-  std::vector<Vector3> y;    // one per row
-  std::vector<double> w;     // one per row
-  // Each point's row, kNoRow for a point of weight 0, when the rows are those of every point (a stride of 1); else
-  // empty. The fit's assembly and its variance factors then take the rows made here instead of evaluating each
-  // point's basis again: the same numbers.
-  static constexpr std::uint32_t kNoRow = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> row_of_point;
-  // Where each knot span's rows begin (rows are in span order), and the end: for leave-span-out.
-  std::vector<std::size_t> span_starts;
-  [[nodiscard]] bool cover_every_point() const { return !row_of_point.empty(); }
-};
 
 // The data's normal equations for the displacement: AᵀWA, AᵀWy and yᵀWy with y_k = x_k − S⁰(u_k, v_k).
 struct DataTerms {
@@ -245,180 +168,6 @@ constexpr int kSmoothingBiasPasses = 8;
 // 2 n (b + 1) doubles; a 10 000-point face's 9 trials, 1.2 MB; a million points' finest fits, hundreds).
 constexpr std::size_t kParallelScanBytes = std::size_t{16} << 20;
 
-CvRows cv_rows(const RowMaker& maker, std::span<const Point3> points, std::span<const SurfaceParameter> params,
-               std::span<const double> weights) {
-  const Surface& s = maker.s;
-  const Ordering& order = maker.order;
-  const int p = s.p(), q = s.q();
-  const std::size_t n_points = points.size();
-  const std::size_t stride = cv_stride(n_points);
-  std::vector<std::size_t> chosen;
-  for (std::size_t k = 0; k < n_points; k += stride) {
-    if (weights.empty() || weights[k] != 0.0) chosen.push_back(k);
-  }
-  // Each row's place in span order, stably: a counting sort on its span's first control point (RowMaker's key, as
-  // rational_basis finds the spans), then every row made in parallel at its place.
-  std::vector<int> key(chosen.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chosen.size(), 4096), [&](const auto& range) {
-    for (std::size_t r = range.begin(); r != range.end(); ++r) {
-      const SurfaceParameter& t = params[chosen[r]];
-      key[r] = order.index(s.U().find_span(t.u) - p, s.V().find_span(t.v) - q);
-    }
-  });
-  std::vector<std::size_t> place(static_cast<std::size_t>(order.nu) * static_cast<std::size_t>(order.nv) + 1, 0);
-  for (const int k : key) ++place[static_cast<std::size_t>(k) + 1];
-  std::partial_sum(place.begin(), place.end(), place.begin());
-  std::vector<std::size_t> to(chosen.size());
-  for (std::size_t r = 0; r < chosen.size(); ++r) to[r] = place[static_cast<std::size_t>(key[r])]++;
-  const auto m = static_cast<std::size_t>(maker.m);
-  CvRows rows;
-  rows.m = static_cast<int>(m);
-  rows.idx.resize(chosen.size() * m);
-  rows.R.resize(chosen.size() * m);
-  rows.key.resize(chosen.size());
-  rows.len.resize(chosen.size());
-  rows.y.resize(chosen.size());
-  rows.w.resize(chosen.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chosen.size(), 1024), [&](const auto& range) {
-    RationalBasis rb;
-    for (std::size_t r = range.begin(); r != range.end(); ++r) {
-      const std::size_t k = chosen[r], at = to[r];
-      rows.y[at] = points[k] - maker(params[k], rb, &rows.R[at * m], &rows.idx[at * m], rows.key[at], rows.len[at]);
-      rows.w[at] = weights.empty() ? 1.0 : weights[k];
-    }
-  });
-  for (std::size_t r = 0; r < chosen.size(); ++r) {
-    if (r == 0 || rows.key[r] != rows.key[r - 1]) rows.span_starts.push_back(r);
-  }
-  rows.span_starts.push_back(chosen.size());
-  if (stride == 1) {
-    rows.row_of_point.assign(n_points, CvRows::kNoRow);
-    for (std::size_t r = 0; r < chosen.size(); ++r) rows.row_of_point[chosen[r]] = static_cast<std::uint32_t>(to[r]);
-  }
-  return rows;
-}
-
-// The leave-one-out terms of rows [first, last), in order (see leave_one_out); M is the row length m when fixed at
-// compile time (Eigen::Dynamic otherwise), so that a bicubic row's products stay in vector registers, as in
-// block_quadratic_form (timings in docs/performance.md).
-template <int M>
-double leave_one_out_terms(const CvRows& rows, std::size_t first, std::size_t last, const std::vector<double>& D,
-                           const std::vector<double>& Z, int b) {
-  const int m = rows.m;
-  const std::size_t mm = static_cast<std::size_t>(m);
-  Eigen::Matrix<double, M, M> block(m, m);  // Z over the span's unknowns (gather_block)
-  Eigen::Matrix<double, M, 3> d(m, 3);      // D there
-  int span = -1;
-  double sum = 0.0;
-  for (std::size_t r = first; r < last; ++r) {
-    const int* idx = &rows.idx[r * mm];
-    if (rows.key[r] != span) {
-      span = rows.key[r];
-      gather_block(Z, b, idx, m, block.data());
-      for (int a = 0; a < m; ++a) {
-        const std::size_t I = static_cast<std::size_t>(idx[a]);
-        d.row(a) << D[3 * I], D[3 * I + 1], D[3 * I + 2];
-      }
-    }
-    const Eigen::Map<const Eigen::Matrix<double, M, 1>> R(&rows.R[r * mm], m);
-    const Vector3 fitted = d.transpose() * R;  // the displacement's value at the point: S − S⁰
-    const double v = block_quadratic_form(block.data(), R.data(), m);  // its leverage over its weight
-    const double one_minus_h = std::max(1.0 - rows.w[r] * v, 1e-6);
-    sum += rows.w[r] * (fitted - rows.y[r]).squaredNorm() / (one_minus_h * one_minus_h);
-  }
-  return sum;
-}
-
-// Leave-one-out cross-validation (Allen's PRESS): Σ w_k |r_k|² / (1 − h_k)², r_k the point's residual and h_k its
-// leverage. Unlike GCV, which replaces each h_k by their mean, it sees a point that alone holds a control point
-// (h_k near 1): with scattered points on a fine basis that is where an almost unpenalised fit swings between
-// the points, and GCV, blind to it, would choose such a fit for exact data.
-double leave_one_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b) {
-  const std::size_t n_rows = rows.y.size();
-  // Fixed blocks summed in order: the same sum for any thread count; small enough that 10 000 rows share out over two
-  // cores (10 blocks, not 3).
-  constexpr std::size_t kBlock = 1024;
-  const std::size_t blocks = (n_rows + kBlock - 1) / kBlock;
-  std::vector<double> part(blocks, 0.0);
-  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) {
-    const std::size_t first = blk * kBlock, last = std::min(n_rows, (blk + 1) * kBlock);
-    part[blk] = rows.m == 16 ? leave_one_out_terms<16>(rows, first, last, D, Z, b)  // bicubic: the pipeline's fits
-                             : leave_one_out_terms<Eigen::Dynamic>(rows, first, last, D, Z, b);
-  });
-  double total = 0.0;
-  for (double x : part) total += x;
-  return total;
-}
-
-// The leave-span-out terms of the spans [first, last) of `starts` (each span's rows are rows starts[s] to
-// starts[s + 1], the rows being in span order), in order. Leaving the rows B of a span out of a fit with λ fixed
-// changes their residuals r_B to (I − H_BB)⁻¹ r_B, H_BB = R_B Z R_Bᵀ W_B (Z over the span's m unknowns): by Woodbury,
-// r_B + R_B (Z⁻¹ − R_Bᵀ W_B R_B)⁻¹ R_Bᵀ W_B r_B, an m × m solve per span whatever its number of points: the deletion
-// identity of a linear smoother, with the block of the hat matrix in place of one point's h_k (blocked
-// cross-validation: Arlot and Celisse, "A survey of cross-validation procedures for model selection", 2010).
-template <int M>
-double leave_span_out_terms(const CvRows& rows, const std::vector<std::size_t>& starts, std::size_t first,
-                            std::size_t last, const std::vector<double>& D, const std::vector<double>& Z, int b) {
-  const std::size_t mm = static_cast<std::size_t>(rows.m);
-  using Square = Eigen::Matrix<double, M, M>;
-  double sum = 0.0;
-  for (std::size_t s = first; s < last; ++s) {
-    const std::size_t a = starts[s], e = starts[s + 1];
-    // A THB row's own functions only: its padding repeats an unknown, which would make the block singular.
-    const int m = rows.len[a];
-    Square block(m, m), gram(m, m);
-    Eigen::Matrix<double, M, 3> d(m, 3), g(m, 3);
-    const int* idx = &rows.idx[a * mm];
-    gather_block(Z, b, idx, m, block.data());
-    for (int k = 0; k < m; ++k) {
-      const std::size_t I = static_cast<std::size_t>(idx[k]);
-      d.row(k) << D[3 * I], D[3 * I + 1], D[3 * I + 2];
-    }
-    gram.setZero();
-    g.setZero();
-    for (std::size_t i = a; i < e; ++i) {
-      const Eigen::Map<const Eigen::Matrix<double, M, 1>> R(&rows.R[i * mm], m);
-      const Eigen::RowVector3d r = (d.transpose() * R - rows.y[i]).transpose();
-      gram.noalias() += rows.w[i] * R * R.transpose();
-      g.noalias() += rows.w[i] * R * r;
-    }
-    // Z is the inverse of the whole normal matrix; its block's inverse exceeds RᵀWR of the span's own rows by the
-    // penalty's and the other points' hold on these unknowns: positive definite.
-    const Eigen::LDLT<Square> z(block);
-    const Square K = z.solve(Square::Identity(m, m)) - gram;
-    const Eigen::Matrix<double, M, 3> Kg = K.ldlt().solve(g);
-    for (std::size_t i = a; i < e; ++i) {
-      const Eigen::Map<const Eigen::Matrix<double, M, 1>> R(&rows.R[i * mm], m);
-      const Eigen::RowVector3d r = (d.transpose() * R - rows.y[i]).transpose() + R.transpose() * Kg;
-      sum += rows.w[i] * r.squaredNorm();
-    }
-  }
-  return sum;
-}
-
-// Leave-span-out cross-validation: Σ w_k |r_k^(−span)|², each point's residual from the fit made without every point
-// of its knot span. Leave-one-out judges λ by how well a point is predicted from its nearest neighbours, which on a
-// scanning probe's lines are on its own line: it then chooses almost no smoothing, and across the lines, where
-// nothing but the smoothing holds the fit, the fit swings (shape suite, lines 4 mm apart, σ = 3 µm: contacts up to
-// 0.29 mm off). A span's points left out together must be predicted from other lines, as the fit between the lines
-// is.
-double leave_span_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b) {
-  const std::vector<std::size_t>& starts = rows.span_starts;
-  const std::size_t spans = starts.size() - 1;
-  // Fixed groups of spans summed in order: the same sum for any thread count.
-  constexpr std::size_t kSpansPerGroup = 32;
-  const std::size_t groups = (spans + kSpansPerGroup - 1) / kSpansPerGroup;
-  std::vector<double> part(groups, 0.0);
-  tbb::parallel_for(std::size_t{0}, groups, [&](std::size_t grp) {
-    const std::size_t first = grp * kSpansPerGroup, last = std::min(spans, (grp + 1) * kSpansPerGroup);
-    part[grp] = rows.m == 16 ? leave_span_out_terms<16>(rows, starts, first, last, D, Z, b)
-                             : leave_span_out_terms<Eigen::Dynamic>(rows, starts, first, last, D, Z, b);
-  });
-  double total = 0.0;
-  for (double x : part) total += x;
-  return total;
-}
-
 Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double ridge, double log10_smoothing,
                const CvRows& rows, CrossValidation cv) {
   Trial t;
@@ -436,7 +185,7 @@ Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double 
   const int n = N.n, b = N.b;
   for (int I = 0; I < n; ++I) {
     for (int c = 0; c < 3; ++c) cross += t.D[3 * I + c] * data.AtWy[3 * I + c];
-    for (int J = std::max(0, I - b); J <= I; ++J) {
+    for (int J = data.AtWA.row_start(I); J <= I; ++J) {
       const double a = data.AtWA.at(I, J);
       if (a == 0.0) continue;
       double dot = 0.0;
@@ -448,7 +197,7 @@ Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double 
   std::vector<double> Z = band_inverse(N);
   double trace = 0.0;
   for (int I = 0; I < n; ++I) {
-    for (int J = std::max(0, I - b); J <= I; ++J) {
+    for (int J = data.AtWA.row_start(I); J <= I; ++J) {
       const double a = data.AtWA.at(I, J);
       if (a == 0.0) continue;
       trace += (J == I ? 1.0 : 2.0) * a * Z[static_cast<std::size_t>(J) * (b + 1) + (I - J)];
@@ -501,6 +250,7 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
                          [&] { terms = penalty(); }, [&] { rows = cv_rows(maker, points, params, weights); });
   }
   if (data.used == 0 || !(data.weight_sum > 0.0)) return result;
+  data.AtWA.first = detail::envelope(maker);  // every trial's normal matrix and factor inherit it
   const double data_trace = data.AtWA.trace();
   const double ridge = options.ridge * data_trace / n;
 
@@ -651,7 +401,7 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
     auto bias_of = [&](const std::vector<double>& D) {
       std::vector<double> beta(static_cast<std::size_t>(n) * 3, 0.0);
       for (int I = 0; I < n; ++I) {
-        for (int J = std::max(0, I - b); J <= I; ++J) {
+        for (int J = best.L.row_start(I); J <= I; ++J) {
           const double g = G.at(I, J);
           if (g == 0.0) continue;
           for (int c = 0; c < 3; ++c) {
