@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
+#include <string>
 #include <tuple>
 
 #include "probecomp/nurbs/knot_insertion.hpp"
@@ -80,7 +81,6 @@ struct Function {
 }  // namespace
 
 HierarchicalBasis hierarchical_basis(const Surface& start, std::span<const std::uint8_t> refine, int ring) {
-  const int p = start.p(), q = start.q();
   const std::vector<double> bu = start.U().breakpoints(), bv = start.V().breakpoints();
   const int nsu = static_cast<int>(bu.size()) - 1, nsv = static_cast<int>(bv.size()) - 1;
   if (refine.size() != static_cast<std::size_t>(nsu) * static_cast<std::size_t>(nsv)) {
@@ -95,103 +95,186 @@ HierarchicalBasis hierarchical_basis(const Surface& start, std::span<const std::
         for (int y = std::max(0, b - ring); y <= std::min(nsv - 1, b + ring); ++y) omega[static_cast<std::size_t>(x) * nsv + y] = 1;
     }
   }
-  auto in_omega = [&](std::pair<int, int> su, std::pair<int, int> sv) {
-    for (int a = su.first; a <= su.second; ++a)
-      for (int b = sv.first; b <= sv.second; ++b)
-        if (!omega[static_cast<std::size_t>(a) * nsv + b]) return false;
-    return true;
+  const std::vector<std::vector<std::uint8_t>> domains{std::move(omega)};
+  return hierarchical_basis(start, domains);
+}
+
+HierarchicalBasis hierarchical_basis(const Surface& start, std::span<const std::vector<std::uint8_t>> domains) {
+  const int p = start.p(), q = start.q();
+  const int L = static_cast<int>(domains.size()) + 1;
+  // Each level's breakpoints: level l + 1 halves every span of level l.
+  std::vector<std::vector<double>> bu{start.U().breakpoints()}, bv{start.V().breakpoints()}, mid_u, mid_v;
+  auto halve = [](const std::vector<double>& breaks) {
+    std::vector<double> mid;
+    for (std::size_t a = 0; a + 1 < breaks.size(); ++a) mid.push_back(0.5 * (breaks[a] + breaks[a + 1]));
+    return mid;
   };
-  // Level 1 halves every span; the output knots take a span's midpoint where its column (row) meets Ω¹.
-  std::vector<double> mid_u, mid_v, out_u, out_v;
-  auto halve = [&](const std::vector<double>& breaks, bool along_u, std::vector<double>& mid, std::vector<double>& out) {
-    const int n = static_cast<int>(breaks.size()) - 1, across = along_u ? nsv : nsu;
-    for (int a = 0; a < n; ++a) {
-      const double m = 0.5 * (breaks[static_cast<std::size_t>(a)] + breaks[static_cast<std::size_t>(a) + 1]);
-      mid.push_back(m);
-      bool any = false;
-      for (int b = 0; b < across; ++b) any = any || omega[static_cast<std::size_t>(along_u ? a * nsv + b : b * nsv + a)];
-      if (any) out.push_back(m);
+  auto merged = [](const std::vector<double>& a, const std::vector<double>& b) {
+    std::vector<double> m(a);
+    m.insert(m.end(), b.begin(), b.end());
+    std::sort(m.begin(), m.end());
+    return m;
+  };
+  for (int l = 0; l + 1 < L; ++l) {
+    mid_u.push_back(halve(bu.back()));
+    mid_v.push_back(halve(bv.back()));
+    bu.push_back(merged(bu.back(), mid_u.back()));
+    bv.push_back(merged(bv.back(), mid_v.back()));
+  }
+  auto cells_u = [&](int l) { return static_cast<int>(bu[static_cast<std::size_t>(l)].size()) - 1; };
+  auto cells_v = [&](int l) { return static_cast<int>(bv[static_cast<std::size_t>(l)].size()) - 1; };
+  // Ωˡ (l ≥ 1) is flagged on the cells of level l − 1; a level-l cell (a, b) lies in the level-(l − 1) cell
+  // (a / 2, b / 2).
+  auto in_domain = [&](int l, int a, int b) {
+    return domains[static_cast<std::size_t>(l) - 1][static_cast<std::size_t>(a / 2) * cells_v(l - 1) + b / 2] != 0;
+  };
+  bool any = false;
+  for (int l = 1; l < L; ++l) {
+    const auto& d = domains[static_cast<std::size_t>(l) - 1];
+    if (d.size() != static_cast<std::size_t>(cells_u(l - 1)) * static_cast<std::size_t>(cells_v(l - 1))) {
+      throw std::invalid_argument("hierarchical_basis: Ω" + std::to_string(l) + " needs one flag per cell of level " +
+                                  std::to_string(l - 1));
     }
-  };
-  halve(bu, true, mid_u, out_u);
-  halve(bv, false, mid_v, out_v);
-  HierarchicalBasis basis{.surface = out_u.empty() ? start : nurbs::refine_knots_v(nurbs::refine_knots_u(start, out_u), out_v)};
+    for (int a = 0; a < cells_u(l - 1); ++a) {
+      for (int b = 0; b < cells_v(l - 1); ++b) {
+        if (!d[static_cast<std::size_t>(a) * cells_v(l - 1) + b]) continue;
+        any = true;
+        if (l >= 2 && !in_domain(l - 1, a, b)) throw std::invalid_argument("hierarchical_basis: the domains are not nested");
+      }
+    }
+  }
+  // The output knots: a level-l knot (the midpoint of a level-(l − 1) span) where that span's column (row) meets
+  // Ωˡ. Every active function's knots are among them (docs/local-refinement-plan.md §4).
+  std::vector<double> out_u, out_v;
+  for (int l = 1; l < L && any; ++l) {
+    const auto& d = domains[static_cast<std::size_t>(l) - 1];
+    for (int a = 0; a < cells_u(l - 1); ++a) {
+      bool meets = false;
+      for (int b = 0; b < cells_v(l - 1); ++b) meets = meets || d[static_cast<std::size_t>(a) * cells_v(l - 1) + b];
+      if (meets) out_u.push_back(mid_u[static_cast<std::size_t>(l) - 1][static_cast<std::size_t>(a)]);
+    }
+    for (int b = 0; b < cells_v(l - 1); ++b) {
+      bool meets = false;
+      for (int a = 0; a < cells_u(l - 1); ++a) meets = meets || d[static_cast<std::size_t>(a) * cells_v(l - 1) + b];
+      if (meets) out_v.push_back(mid_v[static_cast<std::size_t>(l) - 1][static_cast<std::size_t>(b)]);
+    }
+  }
+  std::sort(out_u.begin(), out_u.end());
+  std::sort(out_v.begin(), out_v.end());
+  HierarchicalBasis basis{.surface = !any ? start
+                                          : nurbs::refine_knots_v(nurbs::refine_knots_u(start, out_u), out_v)};
   const Surface& S = basis.surface;
-  KnotVector U1, V1;
-  const Eigen::MatrixXd A01u = insertion_matrix(start.U(), mid_u, &U1), A01v = insertion_matrix(start.V(), mid_v, &V1);
-  const Eigen::MatrixXd A0ou = insertion_matrix(start.U(), out_u), A0ov = insertion_matrix(start.V(), out_v);
-  // Level-1 B-splines in the output basis: solve A_out→1 c = e_k (consistent where the B-spline's knots are all
-  // output knots, which holds for every one whose support lies in Ω¹: the only ones used).
-  auto level1_in_out = [&](const KnotVector& Uout, const KnotVector& Ul1) {
+  // Each level's knots, its insertion matrix into the next level's and its surface (for the weights ŵ).
+  std::vector<KnotVector> U{start.U()}, V{start.V()};
+  std::vector<Eigen::MatrixXd> Au, Av;
+  std::vector<Surface> level_surface{start};
+  for (int l = 1; l < L && any; ++l) {
+    KnotVector Ul, Vl;
+    Au.push_back(insertion_matrix(U.back(), mid_u[static_cast<std::size_t>(l) - 1], &Ul));
+    Av.push_back(insertion_matrix(V.back(), mid_v[static_cast<std::size_t>(l) - 1], &Vl));
+    U.push_back(Ul);
+    V.push_back(Vl);
+    level_surface.push_back(nurbs::refine_knots_v(nurbs::refine_knots_u(level_surface.back(), mid_u[static_cast<std::size_t>(l) - 1]),
+                                                  mid_v[static_cast<std::size_t>(l) - 1]));
+  }
+  const int top = static_cast<int>(U.size()) - 1;  // the finest level built (0 without refinement)
+  // within[l][m]: whether each level-l B-spline's support lies inside Ωᵐ (m = l: it may be active; m = l + 1: it is
+  // replaced by finer ones), Ωᵐ being flagged on level-(m − 1) cells, each holding 2^(l−m+1) × 2^(l−m+1) of level l.
+  auto support_within = [&](int l, int m) {
+    const auto su = supports(U[static_cast<std::size_t>(l)], bu[static_cast<std::size_t>(l)]);
+    const auto sv = supports(V[static_cast<std::size_t>(l)], bv[static_cast<std::size_t>(l)]);
+    const int shift = l - m + 1, nvl = V[static_cast<std::size_t>(l)].num_basis();
+    const auto& d = domains[static_cast<std::size_t>(m) - 1];
+    std::vector<std::uint8_t> in(static_cast<std::size_t>(U[static_cast<std::size_t>(l)].num_basis()) * nvl, 0);
+    for (int k = 0; k < U[static_cast<std::size_t>(l)].num_basis(); ++k) {
+      for (int n = 0; n < nvl; ++n) {
+        bool all = true;
+        for (int a = su[static_cast<std::size_t>(k)].first; a <= su[static_cast<std::size_t>(k)].second && all; ++a)
+          for (int b = sv[static_cast<std::size_t>(n)].first; b <= sv[static_cast<std::size_t>(n)].second && all; ++b)
+            all = d[static_cast<std::size_t>(a >> shift) * cells_v(m - 1) + static_cast<std::size_t>(b >> shift)] != 0;
+        in[static_cast<std::size_t>(k) * nvl + n] = all;
+      }
+    }
+    return in;
+  };
+  std::vector<std::vector<std::uint8_t>> inside(static_cast<std::size_t>(top) + 1), deeper(static_cast<std::size_t>(top) + 1);
+  for (int l = 0; l <= top; ++l) {
+    if (l > 0) inside[static_cast<std::size_t>(l)] = support_within(l, l);
+    if (l < top) deeper[static_cast<std::size_t>(l)] = support_within(l, l + 1);
+  }
+  // The output B-splines in the finest level's basis, and a left inverse: a function of the output space has its
+  // output coefficients C·c from its finest-level ones c, exactly (every active function and every truncation of
+  // one lies in the output space).
+  auto finest_in_out = [](const KnotVector& Uout, const KnotVector& Ufine) {
     std::vector<double> extra;
-    for (double x : Ul1.breakpoints())
+    for (double x : Ufine.breakpoints())
       if (Uout.multiplicity(x) == 0) extra.push_back(x);
     const Eigen::MatrixXd A = insertion_matrix(Uout, extra);
-    Eigen::MatrixXd C = A.colPivHouseholderQr().solve(Eigen::MatrixXd::Identity(A.rows(), A.rows()));
-    C = C.unaryExpr([](double x) { return std::abs(x) < kZeroCoefficient ? 0.0 : x; });
-    return std::pair{C, A};
+    return Eigen::MatrixXd(A.colPivHouseholderQr().solve(Eigen::MatrixXd::Identity(A.rows(), A.rows())));
   };
-  const auto [C1u, Aou1] = level1_in_out(S.U(), U1);
-  const auto [C1v, Aov1] = level1_in_out(S.V(), V1);
-  const auto sup0u = supports(start.U(), bu), sup0v = supports(start.V(), bv);
-  const auto sup1u = supports(U1, bu), sup1v = supports(V1, bv);
-  const int n0u = start.num_u(), n0v = start.num_v(), n1u = U1.num_basis(), n1v = V1.num_basis();
+  const Eigen::MatrixXd Cu = finest_in_out(S.U(), U.back()), Cv = finest_in_out(S.V(), V.back());
+  // The output B-splines whose support lies in [a, b] (the others have no part in a function zero outside it).
+  auto out_range = [](const KnotVector& K, double a, double b) {
+    int first = K.num_basis(), last = -1;
+    for (int I = 0; I < K.num_basis(); ++I) {
+      if (K[I] >= a - 1e-12 && K[I + K.degree() + 1] <= b + 1e-12) {
+        first = std::min(first, I);
+        last = std::max(last, I);
+      }
+    }
+    return std::pair{first, last};
+  };
   const int nou = S.num_u(), nov = S.num_v();
-  const bool v_inner = n0v <= n0u;  // as detail::Ordering: the shorter direction inner
-  std::vector<std::uint8_t> active1(static_cast<std::size_t>(n1u) * n1v, 0);
+  const bool v_inner = start.num_v() <= start.num_u();  // as detail::Ordering: the shorter direction inner
   std::vector<Function> functions;
-  Surface level1 = out_u.empty() ? start : nurbs::refine_knots_v(nurbs::refine_knots_u(start, mid_u), mid_v);
-  if (!out_u.empty()) {
-    for (int k = 0; k < n1u; ++k) {
-      for (int l = 0; l < n1v; ++l) {
-        if (!in_omega(sup1u[static_cast<std::size_t>(k)], sup1v[static_cast<std::size_t>(l)])) continue;
-        active1[static_cast<std::size_t>(k) * n1v + l] = 1;
-        // Its knots are all output knots: the solve above is exact for it.
-        const Eigen::VectorXd ek = Aou1 * C1u.col(k) - Eigen::VectorXd::Unit(n1u, k);
-        const Eigen::VectorXd el = Aov1 * C1v.col(l) - Eigen::VectorXd::Unit(n1v, l);
-        if (ek.lpNorm<Eigen::Infinity>() > 1e-9 || el.lpNorm<Eigen::Infinity>() > 1e-9) {
-          throw std::logic_error("hierarchical_basis: a level-1 B-spline inside Ω¹ is not in the output space");
+  Eigen::MatrixXd window, next;
+  for (int l = 0; l <= top; ++l) {
+    const KnotVector& Ul = U[static_cast<std::size_t>(l)];
+    const KnotVector& Vl = V[static_cast<std::size_t>(l)];
+    for (int i = 0; i < Ul.num_basis(); ++i) {
+      for (int j = 0; j < Vl.num_basis(); ++j) {
+        // Active: its support inside Ωˡ (all of the face at level 0) and not inside Ωˡ⁺¹.
+        const std::size_t ij = static_cast<std::size_t>(i) * Vl.num_basis() + static_cast<std::size_t>(j);
+        if ((l > 0 && !inside[static_cast<std::size_t>(l)][ij]) || (l < top && deeper[static_cast<std::size_t>(l)][ij])) continue;
+        Function f{l, i, j, Ul.greville(i), Vl.greville(j), level_surface[static_cast<std::size_t>(l)].weight(i, j), {}};
+        // Its coefficients level by level down to the finest, over the window its support covers, each level's
+        // B-splines inside that level's Ωᵏ taken out (the truncation: Giannelli, Jüttler & Speleers 2012, eq. 9).
+        Eigen::Index iu0 = i, iu1 = i, jv0 = j, jv1 = j;
+        window = Eigen::MatrixXd::Ones(1, 1);
+        for (int k = l + 1; k <= top; ++k) {
+          const Eigen::MatrixXd& A = Au[static_cast<std::size_t>(k) - 1];
+          const Eigen::MatrixXd& B = Av[static_cast<std::size_t>(k) - 1];
+          const auto ru = std::pair{nonzero_rows(A, iu0).first, nonzero_rows(A, iu1).second};
+          const auto rv = std::pair{nonzero_rows(B, jv0).first, nonzero_rows(B, jv1).second};
+          next = A.block(ru.first, iu0, ru.second - ru.first + 1, iu1 - iu0 + 1) * window *
+                 B.block(rv.first, jv0, rv.second - rv.first + 1, jv1 - jv0 + 1).transpose();
+          window.swap(next);
+          std::tie(iu0, iu1) = ru;
+          std::tie(jv0, jv1) = rv;
+          const int nvk = V[static_cast<std::size_t>(k)].num_basis();
+          for (Eigen::Index a = 0; a < window.rows(); ++a)
+            for (Eigen::Index b = 0; b < window.cols(); ++b)
+              if (inside[static_cast<std::size_t>(k)][static_cast<std::size_t>(iu0 + a) * nvk + static_cast<std::size_t>(jv0 + b)]) window(a, b) = 0.0;
         }
-        Function f{1, k, l, U1.greville(k), V1.greville(l), level1.weight(k, l), {}};
-        const auto [iu0, iu1] = nonzero_rows(C1u, k);
-        const auto [jv0, jv1] = nonzero_rows(C1v, l);
-        for (Eigen::Index I = iu0; I <= iu1; ++I) {
-          if (C1u(I, k) == 0.0) continue;
-          for (Eigen::Index J = jv0; J <= jv1; ++J)
-            if (C1v(J, l) != 0.0) f.out.emplace_back(static_cast<int>(I) * nov + static_cast<int>(J), C1u(I, k) * C1v(J, l));
-        }
-        functions.push_back(std::move(f));
+        // In the output basis: C over the output B-splines inside the function's support.
+        const KnotVector& Uf = U.back();
+        const KnotVector& Vf = V.back();
+        const auto [ou0, ou1] = out_range(S.U(), Uf[static_cast<int>(iu0)], Uf[static_cast<int>(iu1) + Uf.degree() + 1]);
+        const auto [ov0, ov1] = out_range(S.V(), Vf[static_cast<int>(jv0)], Vf[static_cast<int>(jv1) + Vf.degree() + 1]);
+        if (ou1 < ou0 || ov1 < ov0) continue;
+        const Eigen::MatrixXd out = Cu.block(ou0, iu0, ou1 - ou0 + 1, window.rows()) * window *
+                                    Cv.block(ov0, jv0, ov1 - ov0 + 1, window.cols()).transpose();
+        for (Eigen::Index I = 0; I < out.rows(); ++I)
+          for (Eigen::Index J = 0; J < out.cols(); ++J)
+            if (std::abs(out(I, J)) > kZeroCoefficient) {
+              f.out.emplace_back(static_cast<int>(ou0 + I) * nov + static_cast<int>(ov0 + J), out(I, J));
+            }
+        if (!f.out.empty()) functions.push_back(std::move(f));
       }
     }
   }
-  basis.refined_unknowns = static_cast<int>(functions.size());
-  // Level 0: a B-spline whose support lies in Ω¹ is replaced; the others are truncated.
-  Eigen::MatrixXd window;
-  for (int i = 0; i < n0u; ++i) {
-    for (int j = 0; j < n0v; ++j) {
-      if (!out_u.empty() && in_omega(sup0u[static_cast<std::size_t>(i)], sup0v[static_cast<std::size_t>(j)])) continue;
-      Function f{0, i, j, start.U().greville(i), start.V().greville(j), start.weight(i, j), {}};
-      // The B-spline in the output basis, over the output rows and columns its support covers (its level-1
-      // children lie inside that support).
-      const auto [iu0, iu1] = nonzero_rows(A0ou, i);
-      const auto [jv0, jv1] = nonzero_rows(A0ov, j);
-      const Eigen::Index ru = iu1 - iu0 + 1, rv = jv1 - jv0 + 1;
-      window = A0ou.col(i).segment(iu0, ru) * A0ov.col(j).segment(jv0, rv).transpose();
-      for (int k = 0; k < n1u && !out_u.empty(); ++k) {
-        if (A01u(k, i) == 0.0) continue;
-        for (int l = 0; l < n1v; ++l) {
-          if (A01v(l, j) == 0.0 || !active1[static_cast<std::size_t>(k) * n1v + l]) continue;
-          window -= (A01u(k, i) * A01v(l, j)) * (C1u.col(k).segment(iu0, ru) * C1v.col(l).segment(jv0, rv).transpose());
-        }
-      }
-      for (Eigen::Index I = 0; I < ru; ++I)
-        for (Eigen::Index J = 0; J < rv; ++J)
-          if (std::abs(window(I, J)) > kZeroCoefficient) {
-            f.out.emplace_back(static_cast<int>(iu0 + I) * nov + static_cast<int>(jv0 + J), window(I, J));
-          }
-      if (!f.out.empty()) functions.push_back(std::move(f));
-    }
-  }
+  basis.refined_unknowns = static_cast<int>(std::count_if(functions.begin(), functions.end(), [](const Function& f) { return f.level > 0; }));
+  basis.levels = top + 1;
   for (Function& f : functions) {
     if (!v_inner) std::swap(f.major, f.minor);
   }

@@ -1,4 +1,4 @@
-// The two-level THB space (hierarchical.hpp) against what a hierarchical space must be, checked with the kernel's
+// The THB space (hierarchical.hpp), of two levels and of three, against what a hierarchical space must be, checked with the kernel's
 // tensor evaluation as the independent reference: non-negative functions summing to one (which a hierarchical
 // basis without truncation breaks), the start's whole tensor space inside it, a level-1 bump inside the refined
 // region inside it and one outside not, linearly independent functions, and the fit in it equal to the tensor fit
@@ -295,6 +295,122 @@ TEST(HierarchicalBasis, ACreaseIsFollowedWithFewerUnknownsThanByKnotLinesAcrossT
       }
     }
   }
+}
+
+// s with every span halved `levels` times: the tensor space of that THB level.
+Surface refined_to_level(const Surface& s, int levels) {
+  Surface r = s;
+  for (int l = 0; l < levels; ++l) {
+    std::vector<double> mu, mv;
+    const std::vector<double> bu = r.U().breakpoints(), bv = r.V().breakpoints();
+    for (std::size_t a = 0; a + 1 < bu.size(); ++a) mu.push_back(0.5 * (bu[a] + bu[a + 1]));
+    for (std::size_t b = 0; b + 1 < bv.size(); ++b) mv.push_back(0.5 * (bv[b] + bv[b + 1]));
+    r = nurbs::refine_knots_v(nurbs::refine_knots_u(r, mu), mv);
+  }
+  return r;
+}
+
+TEST(HierarchicalBasis, ThreeLevelsHoldWhatEachLevelsDomainAllowsAndNoMore) {
+  for (const Surface& raw : surfaces()) {
+    const Surface s = with_spans(raw);
+    const int nsu = s.U().num_spans(), nsv = s.V().num_spans();
+    // Ω¹: the corner's 4 × 4 level-0 cells; Ω²: the level-1 cells of its 3 × 3 level-0 cells (6 × 6 of level 1).
+    std::vector<std::vector<std::uint8_t>> domains(2);
+    domains[0].assign(static_cast<std::size_t>(nsu) * nsv, 0);
+    domains[1].assign(static_cast<std::size_t>(4 * nsu) * nsv, 0);
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) domains[0][static_cast<std::size_t>(a) * nsv + b] = 1;
+    for (int a = 0; a < 6; ++a)
+      for (int b = 0; b < 6; ++b) domains[1][static_cast<std::size_t>(a) * (2 * nsv) + b] = 1;
+    const HierarchicalBasis basis = hierarchical_basis(s, domains);
+    EXPECT_EQ(basis.levels, 3);
+    ASSERT_GT(basis.refined_unknowns, 0);
+    // Non-negative, summing to one.
+    double worst_sum = 0.0, lowest = 1.0;
+    for (const auto& t : random_thb_parameters(s, 10000, 21)) {
+      const HierarchicalRow row = hierarchical_row(basis, t.u, t.v);
+      double sum = 0.0;
+      for (double r : row.value) {
+        sum += r;
+        lowest = std::min(lowest, r);
+      }
+      worst_sum = std::max(worst_sum, std::abs(sum - 1.0));
+    }
+    EXPECT_LE(worst_sum, 1e-13);
+    EXPECT_GE(lowest, -1e-14);
+    // The start's space, independent functions (points enough for the level-2 functions' small supports: the
+    // corner's 3 × 3 cells, under a tenth of the face, hold about a hundred of them).
+    const auto t = random_thb_parameters(s, 25 * basis.unknowns, 22);
+    std::mt19937_64 rng(23);
+    std::uniform_real_distribution<double> nudge(-0.05, 0.05);
+    std::vector<HomogeneousPoint> Pw = s.homogeneous();
+    for (auto& h : Pw) h.z() += h.w() * nudge(rng);
+    const Surface moved(s.U(), s.V(), Pw);
+    Eigen::Index rank = 0;
+    EXPECT_LE(worst_misfit(basis, t, [&](const SurfaceParameter& x) {
+      return (nurbs::evaluate(moved, x.u, x.v) - nurbs::evaluate(s, x.u, x.v)).z();
+    }, &rank), 1e-11);
+    EXPECT_EQ(rank, basis.unknowns);
+    // A bump of one B-spline of level 1 or 2 (with the level's weights, as the rational space has them): held where
+    // its support lies in that level's domain, not where it does not. The domains' corners in parameters:
+    const std::vector<double> bu = s.U().breakpoints(), bv = s.V().breakpoints();
+    auto bump = [&](int level, double u_end, double v_end, bool inside) {
+      const Surface fine = refined_to_level(s, level);
+      // The B-spline nearest the corner's far edge whose support ends inside (or, for `inside` false, beyond it
+      // but inside the coarser domain).
+      int k = -1, l = -1;
+      for (int i = 0; i < fine.num_u(); ++i) {
+        const double end = fine.U()[i + fine.p() + 1];
+        if (inside ? end <= u_end : end > u_end && end <= bu[4] && fine.U()[i] > bu[0]) k = i;
+        if (!inside && k >= 0) break;
+      }
+      for (int j = 0; j < fine.num_v(); ++j) {
+        const double end = fine.V()[j + fine.q() + 1];
+        if (inside ? end <= v_end : end > v_end && end <= bv[4] && fine.V()[j] > bv[0]) l = j;
+        if (!inside && l >= 0) break;
+      }
+      EXPECT_GE(k, 0);
+      EXPECT_GE(l, 0);
+      std::vector<HomogeneousPoint> Q = fine.homogeneous();
+      HomogeneousPoint& h = Q[static_cast<std::size_t>(k * fine.num_v() + l)];
+      h.z() += 0.1 * h.w();
+      const Surface bumped(fine.U(), fine.V(), Q);
+      return worst_misfit(basis, t, [&](const SurfaceParameter& x) {
+        return (nurbs::evaluate(bumped, x.u, x.v) - nurbs::evaluate(fine, x.u, x.v)).z();
+      });
+    };
+    EXPECT_LE(bump(1, bu[4], bv[4], true), 1e-11);   // level 1 inside Ω¹
+    EXPECT_LE(bump(2, bu[3], bv[3], true), 1e-11);   // level 2 inside Ω²
+    EXPECT_GE(bump(2, bu[3], bv[3], false), 1e-4);   // level 2 inside Ω¹ but past Ω²
+    // The NURBS form is the sum of the functions.
+    std::vector<double> D(static_cast<std::size_t>(basis.unknowns) * 3);
+    for (double& x : D) x = nudge(rng);
+    const Surface out = to_nurbs(basis, D);
+    double worst = 0.0;
+    for (std::size_t k = 0; k < t.size(); k += 7) {
+      const HierarchicalRow row = hierarchical_row(basis, t[k].u, t[k].v);
+      Vector3 sum = nurbs::evaluate(basis.surface, t[k].u, t[k].v) - Point3::Zero();
+      for (std::size_t e = 0; e < row.unknown.size(); ++e) {
+        const auto tau = static_cast<std::size_t>(row.unknown[e]);
+        sum += row.value[e] * Vector3(D[3 * tau], D[3 * tau + 1], D[3 * tau + 2]);
+      }
+      worst = std::max(worst, (nurbs::evaluate(out, t[k].u, t[k].v) - Point3::Zero() - sum).norm());
+    }
+    EXPECT_LE(worst, 1e-12);
+  }
+}
+
+TEST(HierarchicalBasis, DomainsThatAreNotNestedOrOfTheWrongSizeAreRefused) {
+  const Surface s = testing::freeform_panel(3, 8);
+  const int nsu = s.U().num_spans(), nsv = s.V().num_spans();
+  std::vector<std::vector<std::uint8_t>> domains(2);
+  domains[0].assign(static_cast<std::size_t>(nsu) * nsv, 0);
+  domains[1].assign(static_cast<std::size_t>(4 * nsu) * nsv, 0);
+  domains[0][0] = 1;
+  domains[1][static_cast<std::size_t>(2 * (2 * nsv)) + 2] = 1;  // a level-1 cell in level-0 cell (1, 1), not in Ω¹
+  EXPECT_THROW((void)hierarchical_basis(s, domains), std::invalid_argument);
+  domains[1].pop_back();
+  EXPECT_THROW((void)hierarchical_basis(s, domains), std::invalid_argument);
 }
 
 }  // namespace
