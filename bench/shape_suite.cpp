@@ -1,7 +1,7 @@
 // The shape suite of issue 48, scored: a command that prints its own figures, not a timed benchmark.
 //   probecomp_shape_suite [--sigma S] [--case NAME[,NAME…]] [--draw N [--first SEED]] [--no-reference]
 //                         [--plain-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D]
-//                         [--no-local-refinement]
+//                         [--no-local-refinement] [--levels L] [--min-cover C]
 // Each case of simulation::shape_suite() (or N cases drawn at random from its families, seeds FIRST, FIRST+1, …)
 // is simulated, compensated by the CAD method and scored against the actual part: std, mean and largest error
 // (µm, ok rows), the rows flagged, ±2u coverage overall and in the worst of 6 × 6 regions, the fitted centre
@@ -16,7 +16,9 @@
 // u promises a region on average), and the worst region's coverage had each point's u been its true rms error
 // (over the draws): about what a u without fault would reach in the worst region of one draw. --noise-draw D
 // runs draw D of each case's noise instead of its own (0). --no-local-refinement fits with
-// fitting::AdaptiveFitOptions::local_refinement off (knot lines only, as before it).
+// fitting::AdaptiveFitOptions::local_refinement off (knot lines only, as before it); --levels L lets cells refine
+// locally to THB level L (AdaptiveFitOptions::local_refinement_levels), --min-cover C sets
+// AdaptiveFitOptions::local_refinement_min_cover.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -99,10 +101,14 @@ int main(int argc, char** argv) {
       seeds = std::atoi(next().c_str());
     } else if (arg == "--no-local-refinement") {
       options.fit.surface.local_refinement = false;
+    } else if (arg == "--min-cover") {
+      options.fit.surface.local_refinement_min_cover = std::atof(next().c_str());
+    } else if (arg == "--levels") {
+      options.fit.surface.local_refinement_levels = std::atoi(next().c_str());
     } else if (arg == "--noise-draw") {
       noise_draw = std::strtoull(next().c_str(), nullptr, 10);
     } else {
-      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D] [--no-local-refinement]\n",
+      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D] [--no-local-refinement] [--levels L] [--min-cover C]\n",
                    argv[0]);
       return 2;
     }

@@ -12,8 +12,11 @@
 
 #include "probecomp/fitting/noise_estimate.hpp"
 #include "probecomp/fitting/spans.hpp"
+#include "probecomp/fitting/hierarchical.hpp"
 #include "probecomp/nurbs/closest_point.hpp"
 #include "probecomp/geometry/statistics.hpp"
+
+#include "hierarchy_marks.hpp"
 
 namespace probecomp::fitting {
 
@@ -196,11 +199,12 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   // hat matrix does not describe).
   Surface target = start;
   const LocalPredictionNoise local_noise(points, weights);
-  // With local refinement (AdaptiveFitOptions::local_refinement): the cells of `target` (its knot spans) refined
-  // by one level in a THB basis, and that basis; none marked: the tensor fit on `target`.
+  // With local refinement (AdaptiveFitOptions::local_refinement): the cells of `target` (its knot spans, and at
+  // level l those halved l times) marked for a finer level of a THB basis, and that basis; none marked: the tensor
+  // fit on `target`.
   const bool refine_locally = options.local_refinement && !options.split_only_where_points_either_side &&
                      options.fit.cross_validation == CrossValidation::LeaveOneOut;
-  std::vector<std::uint8_t> marked;
+  detail::LevelFlags marks;
   std::optional<HierarchicalBasis> basis;
 
   // The penalty's weight per knot span (a · V spans + b) of the surface fitted (target, or the basis's output
@@ -517,51 +521,70 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       // lowering with it.
       const std::vector<double> tbu = target.U().breakpoints(), tbv = target.V().breakpoints();
       const std::size_t tsu = tbu.size() - 1, tsv = tbv.size() - 1;
-      if (marked.empty()) marked.assign(tsu * tsv, 0);
-      std::vector<std::uint8_t> grown = marked;
+      // A flagged span is marked for one level finer than the finest whose domain holds it, up to the deepest level
+      // allowed (AdaptiveFitOptions::local_refinement_levels).
+      const detail::LevelFlags domains_now = detail::nested_domains(marks, tbu, tbv, options.local_refinement_ring);
+      detail::LevelFlags grown = marks;
       std::vector<char> line_u(tsu, 0), line_v(tsv, 0);
       for (std::size_t s = 0; s < nsu * nsv; ++s) {
         if (!split[s]) continue;
         const std::size_t a = s / nsv, b = s % nsv;
-        const auto c0 = static_cast<std::size_t>(span_of(tbu, 0.5 * (bu[a] + bu[a + 1])));
-        const auto c1 = static_cast<std::size_t>(span_of(tbv, 0.5 * (bv[b] + bv[b + 1])));
-        line_u[c0] = line_v[c1] = 1;
-        if (!trial) grown[c0 * tsv + c1] = 1;
+        const double u = 0.5 * (bu[a] + bu[a + 1]), v = 0.5 * (bv[b] + bv[b + 1]);
+        line_u[static_cast<std::size_t>(span_of(tbu, u))] = line_v[static_cast<std::size_t>(span_of(tbv, v))] = 1;
+        const int depth = detail::depth_at(domains_now, tbu, tbv, u, v);
+        if (!trial) detail::mark_at(grown, std::min(depth, options.local_refinement_levels - 1), tbu, tbv, u, v);
       }
-      for (const bool lines : {true, false}) {
-        const std::vector<double> cu = lines ? flagged_span_midpoints(tbu, line_u) : std::vector<double>{};
-        const std::vector<double> cv = lines ? flagged_span_midpoints(tbv, line_v) : std::vector<double>{};
-        if (lines ? cu.empty() && cv.empty() : grown == marked) continue;
+      // Two candidates, each of knot lines and marks: lines through every flagged span with the marks as they
+      // were, and the new marks alone. The first the points support is taken, except that the second replaces
+      // the first where it adds fewer control points and its refined region covers at least
+      // local_refinement_min_cover of the face (see AdaptiveFitOptions).
+      struct Candidate {
+        std::vector<char> lu, lv;
+        const detail::LevelFlags* from;
+      };
+      const Candidate candidates[] = {{line_u, line_v, &marks},
+                                      {std::vector<char>(tsu, 0), std::vector<char>(tsv, 0), &grown}};
+      struct Built {
+        std::vector<double> cu, cv;
+        Surface next;
+        detail::LevelFlags marks;
+        std::optional<HierarchicalBasis> basis;
+        int count = 0;
+      };
+      std::optional<Built> chosen;
+      for (const Candidate& c : candidates) {
+        const std::vector<double> cu = flagged_span_midpoints(tbu, c.lu);
+        const std::vector<double> cv = flagged_span_midpoints(tbv, c.lv);
+        if (cu.empty() && cv.empty() && *c.from == marks) continue;
         Surface next = cu.empty() ? target : nurbs::refine_knots_u(target, cu);
         if (!cv.empty()) next = nurbs::refine_knots_v(next, cv);
-        // The cells marked so far (and, without lines, the new ones) on next's spans: a cell cut by a line leaves
-        // its mark on both halves.
-        const std::vector<std::uint8_t>& from = lines ? marked : grown;
-        const std::vector<double> nbu = next.U().breakpoints(), nbv = next.V().breakpoints();
-        std::vector<std::uint8_t> cells((nbu.size() - 1) * (nbv.size() - 1));
-        for (std::size_t a = 0; a + 1 < nbu.size(); ++a) {
-          const auto oa = static_cast<std::size_t>(span_of(tbu, 0.5 * (nbu[a] + nbu[a + 1])));
-          for (std::size_t b = 0; b + 1 < nbv.size(); ++b) {
-            const auto ob = static_cast<std::size_t>(span_of(tbv, 0.5 * (nbv[b] + nbv[b + 1])));
-            cells[a * (nbv.size() - 1) + b] = from[oa * tsv + ob];
-          }
-        }
+        // The marks on next's cells: a cell cut by a line leaves its mark on both halves.
+        detail::LevelFlags next_marks =
+            detail::carried(*c.from, tbu, tbv, next.U().breakpoints(), next.V().breakpoints());
+        const detail::LevelFlags domains =
+            detail::nested_domains(next_marks, next.U().breakpoints(), next.V().breakpoints(), options.local_refinement_ring);
         std::optional<HierarchicalBasis> candidate;
-        if (std::count(cells.begin(), cells.end(), 1) > 0) {
-          candidate = hierarchical_basis(next, cells, options.local_refinement_ring);
-        }
+        if (!domains.empty()) candidate = hierarchical_basis(next, domains);
         const int count_after = candidate ? candidate->unknowns : next.num_u() * next.num_v();
         if (static_cast<double>(count_after) * per_control_point > static_cast<double>(used)) continue;
-        xu = cu;
-        xv = cv;
-        target = std::move(next);
-        marked = std::move(cells);
-        basis.reset();
-        if (candidate && candidate->refined_unknowns > 0) basis = std::move(candidate);
-        refined = true;
-        break;
+        const double cover = domains.empty() ? 0.0
+                                             : static_cast<double>(std::count(domains[0].begin(), domains[0].end(), 1)) /
+                                                   static_cast<double>(domains[0].size());
+        if (!chosen || (count_after < chosen->count && cover >= options.local_refinement_min_cover)) {
+          chosen = Built{cu, cv, std::move(next), std::move(next_marks), std::move(candidate), count_after};
+        }
       }
-      result.refined_cells = static_cast<int>(std::count(marked.begin(), marked.end(), 1));
+      if (chosen) {
+        xu = chosen->cu;
+        xv = chosen->cv;
+        target = std::move(chosen->next);
+        marks = std::move(chosen->marks);
+        basis.reset();
+        if (chosen->basis && chosen->basis->refined_unknowns > 0) basis = std::move(chosen->basis);
+        refined = true;
+      }
+      result.refined_cells = 0;
+      for (const auto& m : marks) result.refined_cells += static_cast<int>(std::count(m.begin(), m.end(), 1));
     }
     if (!refined && !lowered) return finish(status_now);
     // Each new span of the surface fitted next inherits the weight of the span it was cut from.

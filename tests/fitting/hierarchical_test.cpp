@@ -14,6 +14,7 @@
 
 #include "probecomp/fitting/penalized.hpp"
 #include "probecomp/nurbs/constructors.hpp"
+#include "fitting/hierarchy_marks.hpp"
 #include "support/light.hpp"
 #include "support/test_surfaces.hpp"
 
@@ -72,23 +73,28 @@ double worst_misfit(const HierarchicalBasis& basis, const std::vector<fitting::S
   return (A * qr.solve(y) - y).lpNorm<Eigen::Infinity>();
 }
 
+// At 10 000 random points of s: the functions non-zero there are ≥ 0 and sum to 1.
+void expect_partition_of_unity(const HierarchicalBasis& basis, const Surface& s, std::uint64_t seed) {
+  double worst_sum = 0.0, lowest = 1.0;
+  for (const auto& t : random_thb_parameters(s, 10000, seed)) {
+    const HierarchicalRow row = hierarchical_row(basis, t.u, t.v);
+    double sum = 0.0;
+    for (double r : row.value) {
+      sum += r;
+      lowest = std::min(lowest, r);
+    }
+    worst_sum = std::max(worst_sum, std::abs(sum - 1.0));
+  }
+  EXPECT_LE(worst_sum, 1e-13);
+  EXPECT_GE(lowest, -1e-14);
+}
+
 TEST(HierarchicalBasis, ItsFunctionsAreNonNegativeAndSumToOneOnRationalAndPolynomialFaces) {
   for (const Surface& raw : surfaces()) {
     const Surface s = with_spans(raw);
     const HierarchicalBasis basis = hierarchical_basis(s, diagonal_band(s));
     ASSERT_GT(basis.refined_unknowns, 0);
-    double worst_sum = 0.0, lowest = 1.0;
-    for (const auto& t : random_thb_parameters(s, 10000, 5)) {
-      const HierarchicalRow row = hierarchical_row(basis, t.u, t.v);
-      double sum = 0.0;
-      for (double r : row.value) {
-        sum += r;
-        lowest = std::min(lowest, r);
-      }
-      worst_sum = std::max(worst_sum, std::abs(sum - 1.0));
-    }
-    EXPECT_LE(worst_sum, 1e-13);
-    EXPECT_GE(lowest, -1e-14);
+    expect_partition_of_unity(basis, s, 5);
     EXPECT_LE(basis.max_row, 2 * (s.p() + 1) * (s.q() + 1));
   }
 }
@@ -325,19 +331,7 @@ TEST(HierarchicalBasis, ThreeLevelsHoldWhatEachLevelsDomainAllowsAndNoMore) {
     const HierarchicalBasis basis = hierarchical_basis(s, domains);
     EXPECT_EQ(basis.levels, 3);
     ASSERT_GT(basis.refined_unknowns, 0);
-    // Non-negative, summing to one.
-    double worst_sum = 0.0, lowest = 1.0;
-    for (const auto& t : random_thb_parameters(s, 10000, 21)) {
-      const HierarchicalRow row = hierarchical_row(basis, t.u, t.v);
-      double sum = 0.0;
-      for (double r : row.value) {
-        sum += r;
-        lowest = std::min(lowest, r);
-      }
-      worst_sum = std::max(worst_sum, std::abs(sum - 1.0));
-    }
-    EXPECT_LE(worst_sum, 1e-13);
-    EXPECT_GE(lowest, -1e-14);
+    expect_partition_of_unity(basis, s, 21);
     // The start's space, independent functions (points enough for the level-2 functions' small supports: the
     // corner's 3 × 3 cells, under a tenth of the face, hold about a hundred of them).
     const auto t = random_thb_parameters(s, 25 * basis.unknowns, 22);
@@ -411,6 +405,44 @@ TEST(HierarchicalBasis, DomainsThatAreNotNestedOrOfTheWrongSizeAreRefused) {
   EXPECT_THROW((void)hierarchical_basis(s, domains), std::invalid_argument);
   domains[1].pop_back();
   EXPECT_THROW((void)hierarchical_basis(s, domains), std::invalid_argument);
+}
+
+TEST(HierarchyMarks, MarksGrowIntoNestedDomainsThatHierarchicalBasisTakes) {
+  // A bicubic panel of 4 × 4 equal spans.
+  const Surface s = testing::freeform_panel(3, 7, true);
+  const std::vector<double> bu = s.U().breakpoints(), bv = s.V().breakpoints();
+  const auto x = [&](const std::vector<double>& b, double f) { return b.front() + f * (b.back() - b.front()); };
+  detail::LevelFlags marks;
+  // Level-0 cell (1, 1); then the level-1 cell holding a point inside it, and one on Ω¹'s far edge.
+  const double u1 = x(bu, 1.3 / 4), v1 = x(bv, 1.3 / 4);
+  detail::mark_at(marks, 0, bu, bv, u1, v1);
+  detail::mark_at(marks, 1, bu, bv, u1, v1);
+  detail::mark_at(marks, 1, bu, bv, x(bu, 2.9 / 4), x(bv, 2.9 / 4));
+  const detail::LevelFlags domains = detail::nested_domains(marks, bu, bv, 1);
+  ASSERT_EQ(domains.size(), 2u);
+  const int nsu = static_cast<int>(bu.size()) - 1, nsv = static_cast<int>(bv.size()) - 1;
+  // Ω¹: the 3 × 3 level-0 cells around (1, 1); Ω²: level-1 cells around the marked ones, none outside Ω¹.
+  for (int a = 0; a < 2 * nsu; ++a) {
+    for (int b = 0; b < 2 * nsv; ++b) {
+      if (domains[1][static_cast<std::size_t>(a) * (2 * nsv) + b]) {
+        EXPECT_TRUE(domains[0][static_cast<std::size_t>(a / 2) * nsv + b / 2]) << a << ", " << b;
+      }
+    }
+  }
+  EXPECT_EQ(std::count(domains[0].begin(), domains[0].end(), 1), 9);
+  EXPECT_EQ(detail::depth_at(domains, bu, bv, u1, v1), 2);
+  EXPECT_EQ(detail::depth_at(domains, bu, bv, x(bu, 0.2 / 4), x(bv, 0.2 / 4)), 1);
+  EXPECT_EQ(detail::depth_at(domains, bu, bv, x(bu, 3.5 / 4), x(bv, 2.5 / 4)), 0);
+  const HierarchicalBasis basis = hierarchical_basis(s, domains);
+  EXPECT_EQ(basis.levels, 3);
+  // Carried to breakpoints with a line through the first span: the new cells take their old cell's marks.
+  std::vector<double> nbu = bu;
+  nbu.insert(nbu.begin() + 1, 0.5 * (bu[0] + bu[1]));
+  const detail::LevelFlags moved = detail::carried(marks, bu, bv, nbu, bv);
+  ASSERT_EQ(moved[0].size(), static_cast<std::size_t>(nsu + 1) * nsv);
+  for (int a = 0; a <= nsu; ++a) {
+    for (int b = 0; b < nsv; ++b) EXPECT_EQ(moved[0][static_cast<std::size_t>(a) * nsv + b], a == 2 && b == 1 ? 1 : 0);
+  }
 }
 
 }  // namespace

@@ -64,7 +64,7 @@ struct AdaptiveFitOptions {
   // dent flagged at 2 in one seed; the steep dent's 0.54 µm against 1.6 µm.
   double min_points_per_control_point_noise_free = 1.25;
   // Where the knot lines through the flagged spans would give the fit more control points than the points support
-  // (the rule above), refine the flagged spans' cells by one level of a THB basis (fitting/hierarchical.hpp)
+  // (the rule above), refine the flagged spans' cells by a level of a THB basis (fitting/hierarchical.hpp)
   // instead: control points near them only, none along the rest of their lines. Grids and random points only (not
   // on a scanning probe's lines, where a cell between lines would hold no points). Measured (probecomp_shape_suite
   // --no-reference): of the suite's 30 cases and 120 unseen draws it changes 3, those whose refinement the points'
@@ -76,6 +76,21 @@ struct AdaptiveFitOptions {
   // 2.75, 1.112 and 1.80 µm; three: 2.14, 1.164 and 3.61 µm (D906's cells then need more control points than its
   // points support, and it falls back to lines).
   int local_refinement_ring = 2;
+  // The finest THB level a cell may reach: a flagged span inside level l's refined region is refined to level
+  // l + 1, up to this (1: one level, as before). Of the suite's cases only S11 refines past level 1: 2.747 -> 2.027 µm
+  // (more rows flagged, 20 -> 37; the fitted centres' rms 3.44 -> 3.86 µm); over 8 draws of its noise, median
+  // 2.080 -> 2.100 µm and worst 2.747 -> 2.468.
+  int local_refinement_levels = 3;
+  // Local refinement is also taken instead of knot lines where it adds fewer control points and its level-1 region
+  // covers at least this share of the face's cells; above 1 (the default), never: local refinement only where
+  // lines exceed the points' support. (Where the flagged spans, grown by the ring, cover most of the face, a level
+  // over them adds fewer control points than lines through them, which cut long thin spans across it; where they
+  // cover little, they are often a wave over the whole face seen in a few places, which lines refine where the rest
+  // of it is.) Measured at 0.5 with 3 levels (probecomp_shape_suite --no-reference): S11 2.747 -> 1.026 µm, S02,
+  // S17, S23 better, S15 1.080 -> 1.153; on 48 unseen draws 4 better and 3 worse (D211 1.427 -> 1.675 µm), and
+  // where it acts the worst region's ±2u coverage falls by up to 12 points (D307, D401, D412): u is less honest on
+  // those fits, so it is not the default. At 0, S27 and S28's worst regions fall to 63 and 67 %.
+  double local_refinement_min_cover = 2.0;
 };
 
 // Fewer points than this around a point (its span and the eight around it) give no median worth the name: their
