@@ -68,8 +68,8 @@ struct AdaptiveFitOptions {
   // instead: control points near them only, none along the rest of their lines. Grids and random points only (not
   // on a scanning probe's lines, where a cell between lines would hold no points). Measured (probecomp_shape_suite
   // --no-reference): of the suite's 30 cases and 120 unseen draws it changes 3, those whose refinement the points'
-  // support or the rounds stopped: S11 7.24 -> 2.75 µm, S26 1.469 -> 1.112 µm, D906 3.61 -> 1.80 µm; the rest
-  // print the same to the last digit.
+  // support or the rounds stopped: S11 7.24 -> 2.75 µm (one level; 2.03 with three, below), S26 1.469 -> 1.112 µm,
+  // D906 3.61 -> 1.80 µm; the rest print the same to the last digit.
   bool local_refinement = true;
   // Cells all round a flagged one refined with it: a level-1 bicubic needs 2 × 2 cells inside the refined region,
   // so a lone cell gains almost nothing. On those three cases, one cell all round: 3.02, 1.132 and 2.05 µm; two:
