@@ -515,9 +515,9 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       refined = !xu.empty() || !xv.empty();
     } else {
       // As above, knot lines through every flagged span; but where the points would not support the control points
-      // they add, the flagged spans' cells of `target` are refined by one level of a THB basis instead, which adds
-      // control points near them only (a cell refined already is split by lines alone). Not on a round tried for
-      // a thin misfit (see above): undone as a whole when its score is no lower, it would take the penalty's
+      // they add, the flagged spans' cells are refined by a level of a THB basis instead, which adds control points
+      // near them only (a cell at the deepest level allowed is split by lines alone). Not on a round tried for a
+      // thin misfit (see above): undone as a whole when its score is no lower, it would take the penalty's
       // lowering with it.
       const std::vector<double> tbu = target.U().breakpoints(), tbv = target.V().breakpoints();
       const std::size_t tsu = tbu.size() - 1, tsv = tbv.size() - 1;
@@ -553,6 +553,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       };
       std::optional<Built> chosen;
       for (const Candidate& c : candidates) {
+        if (chosen && options.local_refinement_min_cover > 1.0) break;  // the second could not replace the first
         const std::vector<double> cu = flagged_span_midpoints(tbu, c.lu);
         const std::vector<double> cv = flagged_span_midpoints(tbv, c.lv);
         if (cu.empty() && cv.empty() && *c.from == marks) continue;
