@@ -95,13 +95,6 @@ constexpr double kOwnResidualSigmas = 3.0;
 // Half-width, in decades, of the smoothing search after a parameter correction (see fit_surface).
 constexpr double kCorrectionBracket = 0.75;
 
-// The span index of t among the breakpoints (the last span holds the domain's end).
-int span_of(const std::vector<double>& breaks, double t) {
-  const auto it = std::upper_bound(breaks.begin(), breaks.end(), t);
-  const int s = static_cast<int>(it - breaks.begin()) - 1;
-  return std::clamp(s, 0, static_cast<int>(breaks.size()) - 2);
-}
-
 // Calls f(s2) for span (a, b) of an nsu × nsv grid of spans (u-major) and each of its (up to) eight neighbours:
 // the neighbourhood the span tests, the bias estimate and the local spread pool over.
 template <typename F>

@@ -12,6 +12,7 @@
 #include "probecomp/nurbs/knot_insertion.hpp"
 
 #include "hierarchical_rows.hpp"
+#include "hierarchy_marks.hpp"
 #include "rational_basis.hpp"
 
 namespace probecomp::fitting {
@@ -87,39 +88,24 @@ HierarchicalBasis hierarchical_basis(const Surface& start, std::span<const std::
     throw std::invalid_argument("hierarchical_basis: one flag per knot span of the start surface expected");
   }
   // Ω¹: the marked cells grown by the ring (eight neighbours a step).
-  std::vector<std::uint8_t> omega(refine.size(), 0);
-  for (int a = 0; a < nsu; ++a) {
-    for (int b = 0; b < nsv; ++b) {
-      if (!refine[static_cast<std::size_t>(a) * nsv + b]) continue;
-      for (int x = std::max(0, a - ring); x <= std::min(nsu - 1, a + ring); ++x)
-        for (int y = std::max(0, b - ring); y <= std::min(nsv - 1, b + ring); ++y) omega[static_cast<std::size_t>(x) * nsv + y] = 1;
-    }
-  }
-  const std::vector<std::vector<std::uint8_t>> domains{std::move(omega)};
+  const std::vector<std::vector<std::uint8_t>> domains =
+      detail::nested_domains({std::vector<std::uint8_t>(refine.begin(), refine.end())}, bu, bv, ring);
   return hierarchical_basis(start, domains);
 }
 
 HierarchicalBasis hierarchical_basis(const Surface& start, std::span<const std::vector<std::uint8_t>> domains) {
   const int p = start.p(), q = start.q();
   const int L = static_cast<int>(domains.size()) + 1;
-  // Each level's breakpoints: level l + 1 halves every span of level l.
+  // Each level's breakpoints (level l + 1 halves every span of level l) and the knots it adds, its spans' midpoints.
   std::vector<std::vector<double>> bu{start.U().breakpoints()}, bv{start.V().breakpoints()}, mid_u, mid_v;
-  auto halve = [](const std::vector<double>& breaks) {
-    std::vector<double> mid;
-    for (std::size_t a = 0; a + 1 < breaks.size(); ++a) mid.push_back(0.5 * (breaks[a] + breaks[a + 1]));
-    return mid;
-  };
-  auto merged = [](const std::vector<double>& a, const std::vector<double>& b) {
-    std::vector<double> m(a);
-    m.insert(m.end(), b.begin(), b.end());
-    std::sort(m.begin(), m.end());
-    return m;
+  auto midpoints = [](const std::vector<double>& breaks) {
+    return flagged_span_midpoints(breaks, std::vector<char>(breaks.size() - 1, 1));
   };
   for (int l = 0; l + 1 < L; ++l) {
-    mid_u.push_back(halve(bu.back()));
-    mid_v.push_back(halve(bv.back()));
-    bu.push_back(merged(bu.back(), mid_u.back()));
-    bv.push_back(merged(bv.back(), mid_v.back()));
+    mid_u.push_back(midpoints(bu.back()));
+    mid_v.push_back(midpoints(bv.back()));
+    bu.push_back(halved(bu.back(), 1));
+    bv.push_back(halved(bv.back(), 1));
   }
   auto cells_u = [&](int l) { return static_cast<int>(bu[static_cast<std::size_t>(l)].size()) - 1; };
   auto cells_v = [&](int l) { return static_cast<int>(bv[static_cast<std::size_t>(l)].size()) - 1; };

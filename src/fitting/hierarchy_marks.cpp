@@ -6,25 +6,9 @@ namespace probecomp::fitting::detail {
 
 namespace {
 
-// The cell of t among the breakpoints (the last holds the domain's end).
-int cell_of(const std::vector<double>& breaks, double t) {
-  const auto it = std::upper_bound(breaks.begin(), breaks.end(), t);
-  return std::clamp(static_cast<int>(it - breaks.begin()) - 1, 0, static_cast<int>(breaks.size()) - 2);
-}
-
 int cells(const std::vector<double>& breaks) { return static_cast<int>(breaks.size()) - 1; }
 
 }  // namespace
-
-std::vector<double> halved(std::vector<double> breaks, int level) {
-  for (int l = 0; l < level; ++l) {
-    std::vector<double> mid;
-    for (std::size_t a = 0; a + 1 < breaks.size(); ++a) mid.push_back(0.5 * (breaks[a] + breaks[a + 1]));
-    breaks.insert(breaks.end(), mid.begin(), mid.end());
-    std::sort(breaks.begin(), breaks.end());
-  }
-  return breaks;
-}
 
 LevelFlags nested_domains(const LevelFlags& marks, const std::vector<double>& bu, const std::vector<double>& bv,
                           int ring) {
@@ -57,7 +41,7 @@ int depth_at(const LevelFlags& domains, const std::vector<double>& bu, const std
   int depth = 0;
   for (std::size_t l = 0; l < domains.size(); ++l) {
     const std::vector<double> hu = halved(bu, static_cast<int>(l)), hv = halved(bv, static_cast<int>(l));
-    if (!domains[l][static_cast<std::size_t>(cell_of(hu, u)) * cells(hv) + static_cast<std::size_t>(cell_of(hv, v))]) break;
+    if (!domains[l][static_cast<std::size_t>(span_of(hu, u)) * cells(hv) + static_cast<std::size_t>(span_of(hv, v))]) break;
     depth = static_cast<int>(l) + 1;
   }
   return depth;
@@ -70,7 +54,7 @@ void mark_at(LevelFlags& marks, int level, const std::vector<double>& bu, const 
     const int l = static_cast<int>(marks.size());
     marks.emplace_back(static_cast<std::size_t>(cells(halved(bu, l))) * static_cast<std::size_t>(cells(halved(bv, l))), 0);
   }
-  marks[static_cast<std::size_t>(level)][static_cast<std::size_t>(cell_of(hu, u)) * cells(hv) + static_cast<std::size_t>(cell_of(hv, v))] = 1;
+  marks[static_cast<std::size_t>(level)][static_cast<std::size_t>(span_of(hu, u)) * cells(hv) + static_cast<std::size_t>(span_of(hv, v))] = 1;
 }
 
 LevelFlags carried(const LevelFlags& marks, const std::vector<double>& bu, const std::vector<double>& bv,
@@ -81,9 +65,9 @@ LevelFlags carried(const LevelFlags& marks, const std::vector<double>& bu, const
     const std::vector<double> nu = halved(nbu, static_cast<int>(l)), nv = halved(nbv, static_cast<int>(l));
     std::vector<std::uint8_t> m(static_cast<std::size_t>(cells(nu)) * cells(nv), 0);
     for (int a = 0; a < cells(nu); ++a) {
-      const int oa = cell_of(hu, 0.5 * (nu[static_cast<std::size_t>(a)] + nu[static_cast<std::size_t>(a) + 1]));
+      const int oa = span_of(hu, 0.5 * (nu[static_cast<std::size_t>(a)] + nu[static_cast<std::size_t>(a) + 1]));
       for (int b = 0; b < cells(nv); ++b) {
-        const int ob = cell_of(hv, 0.5 * (nv[static_cast<std::size_t>(b)] + nv[static_cast<std::size_t>(b) + 1]));
+        const int ob = span_of(hv, 0.5 * (nv[static_cast<std::size_t>(b)] + nv[static_cast<std::size_t>(b) + 1]));
         m[static_cast<std::size_t>(a) * cells(nv) + b] = marks[l][static_cast<std::size_t>(oa) * cells(hv) + static_cast<std::size_t>(ob)];
       }
     }

@@ -1,17 +1,16 @@
 #pragma once
 // Where the adaptive fit (adaptive.cpp) asks a THB hierarchy over a tensor surface for finer levels: marks[l] flags
-// the level-l cells (the surface's knot spans halved l times; cell (a, b) at a·(columns of level l) + b) that level
+// the level-l cells (the surface's knot spans halved l times, spans.hpp's `halved`; cell (a, b) at a·(columns of level l) + b) that level
 // l + 1 should cover, and from them the nested domains hierarchical_basis takes. Private to fitting/.
 
 #include <cstdint>
 #include <vector>
 
+#include "probecomp/fitting/spans.hpp"
+
 namespace probecomp::fitting::detail {
 
 using LevelFlags = std::vector<std::vector<std::uint8_t>>;
-
-// The breakpoints with every span halved `level` times, as hierarchical_basis halves them.
-[[nodiscard]] std::vector<double> halved(std::vector<double> breaks, int level);
 
 // Ω¹ ⊇ Ω² ⊇ …: level l's marks grown by `ring` cells of level l all round (eight neighbours a step), kept inside
 // the domain above (Ωˡ, for l ≥ 1); levels with nothing marked at the end left out.

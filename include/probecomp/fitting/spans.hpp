@@ -1,6 +1,7 @@
 #pragma once
 // Knot-span helpers shared by the refining fitters (offset_surface, fit_surface) and the simulator's refinement.
 
+#include <algorithm>
 #include <vector>
 
 namespace probecomp::fitting {
@@ -14,6 +15,24 @@ namespace probecomp::fitting {
     if (flagged[s]) X.push_back(0.5 * (breaks[s] + breaks[s + 1]));
   }
   return X;
+}
+
+// The span index of t among the breakpoints (the last span holds the domain's end).
+[[nodiscard]] inline int span_of(const std::vector<double>& breaks, double t) {
+  const auto it = std::upper_bound(breaks.begin(), breaks.end(), t);
+  const int s = static_cast<int>(it - breaks.begin()) - 1;
+  return std::clamp(s, 0, static_cast<int>(breaks.size()) - 2);
+}
+
+// The breakpoints with every span halved `times` times (the knot spans of a THB basis's level `times`).
+[[nodiscard]] inline std::vector<double> halved(std::vector<double> breaks, int times) {
+  for (int l = 0; l < times; ++l) {
+    std::vector<double> mid;
+    for (std::size_t a = 0; a + 1 < breaks.size(); ++a) mid.push_back(0.5 * (breaks[a] + breaks[a + 1]));
+    breaks.insert(breaks.end(), mid.begin(), mid.end());
+    std::sort(breaks.begin(), breaks.end());
+  }
+  return breaks;
 }
 
 // `per_span` parameters in each knot span, at its start and in equal steps, and the domain's end.
