@@ -1,7 +1,7 @@
 // The shape suite of issue 48, scored: a command that prints its own figures, not a timed benchmark.
 //   probecomp_shape_suite [--sigma S] [--case NAME[,NAME…]] [--draw N [--first SEED]] [--no-reference]
 //                         [--plain-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D]
-//                         [--no-local-refinement] [--levels L] [--min-cover C]
+//                         [--no-local-refinement] [--levels L] [--min-cover C] [--dense-start K]
 // Each case of simulation::shape_suite() (or N cases drawn at random from its families, seeds FIRST, FIRST+1, …)
 // is simulated, compensated by the CAD method and scored against the actual part: std, mean and largest error
 // (µm, ok rows), the rows flagged, ±2u coverage overall and in the worst of 6 × 6 regions, the fitted centre
@@ -18,7 +18,8 @@
 // runs draw D of each case's noise instead of its own (0). --no-local-refinement fits with
 // fitting::AdaptiveFitOptions::local_refinement off (knot lines only, as before it); --levels L lets cells refine
 // locally to THB level L (AdaptiveFitOptions::local_refinement_levels), --min-cover C sets
-// AdaptiveFitOptions::local_refinement_min_cover.
+// AdaptiveFitOptions::local_refinement_min_cover, --dense-start K AdaptiveFitOptions::dense_start_points_per_control_point
+// (0: the fit from the start's knots only).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -101,6 +102,8 @@ int main(int argc, char** argv) {
       seeds = std::atoi(next().c_str());
     } else if (arg == "--no-local-refinement") {
       options.fit.surface.local_refinement = false;
+    } else if (arg == "--dense-start") {
+      options.fit.surface.dense_start_points_per_control_point = std::atof(next().c_str());
     } else if (arg == "--min-cover") {
       options.fit.surface.local_refinement_min_cover = std::atof(next().c_str());
     } else if (arg == "--levels") {
@@ -108,7 +111,7 @@ int main(int argc, char** argv) {
     } else if (arg == "--noise-draw") {
       noise_draw = std::strtoull(next().c_str(), nullptr, 10);
     } else {
-      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D] [--no-local-refinement] [--levels L] [--min-cover C]\n",
+      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D] [--no-local-refinement] [--levels L] [--min-cover C] [--dense-start K]\n",
                    argv[0]);
       return 2;
     }
@@ -190,8 +193,9 @@ int main(int argc, char** argv) {
       if (stops) {
         // Where each face's refinement stopped, and why: what a basis with local refinement could change.
         for (const compensation::FaceReport& f : s.cad.faces) {
-          std::printf("    face %d: %d points, %d control points, %d rounds, %d fits: %s\n", f.face, f.points,
-                      f.control_points, f.rounds, f.fits, f.stop_reason.c_str());
+          std::printf("    face %d: %d points, %d control points (edf %.1f, log10 lambda %+.2f), %d rounds, %d fits: %s\n",
+                      f.face, f.points, f.control_points, f.effective_dof, f.log10_smoothing, f.rounds, f.fits,
+                      f.stop_reason.c_str());
         }
       }
       if (oracle && !s.cad.faces.empty() && s.cad.faces.front().fitted) {

@@ -84,8 +84,8 @@ void per_member(fitting::AdaptiveFitResult& fit, std::span<const std::uint32_t> 
   expand(fit.misfit);
 }
 
-// Why a face's fit stopped, in one line.
-std::string fit_stop_reason(const fitting::AdaptiveFitResult& fit, const fitting::AdaptiveFitOptions& options) {
+// Why a face's fit stopped.
+std::string fit_stop_cause(const fitting::AdaptiveFitResult& fit, const fitting::AdaptiveFitOptions& options) {
   using S = fitting::AdaptiveFitResult::Status;
   switch (fit.status) {
     case S::OK: return "every span's residuals are consistent with the noise estimate";
@@ -98,6 +98,15 @@ std::string fit_stop_reason(const fitting::AdaptiveFitResult& fit, const fitting
     case S::NumericalError: return "the fit's normal equations could not be solved";
   }
   return "?";
+}
+
+// Why a face's fit stopped, in one line, and where it began.
+std::string fit_stop_reason(const fitting::AdaptiveFitResult& fit, const fitting::AdaptiveFitOptions& options) {
+  // (AdaptiveFitOptions::dense_start_points_per_control_point)
+  const std::string start = fit.dense_start ? " (begun from the nominal's knot spans halved, which predicted "
+                                              "left-out points better)"
+                                            : "";
+  return fit_stop_cause(fit, options) + start;
 }
 
 // A tip against a second face: its centre within this much (mm) as near that face's offset as its own, at most ...

@@ -140,6 +140,37 @@ std::vector<double> span_spread(std::span<const double> standardised, std::span<
   return by_span;
 }
 
+// `s` with every knot span halved, in the direction whose spans are longer (millimetres along the surface), until it
+// has at least `control_points` control points: the same shape on a finer net.
+Surface uniformly_refined(Surface s, double control_points) {
+  const nurbs::Domain d = s.domain();
+  double Lu = 0.0, Lv = 0.0;  // mean speeds, mm per unit parameter (3 × 3 samples; only their ratio matters)
+  for (int a = 0; a < 3; ++a) {
+    for (int c = 0; c < 3; ++c) {
+      const nurbs::SurfaceD1 e =
+          nurbs::derivatives_d1(s, d.u0 + (d.u1 - d.u0) * (a + 0.5) / 3, d.v0 + (d.v1 - d.v0) * (c + 0.5) / 3);
+      Lu += e.Su.norm();
+      Lv += e.Sv.norm();
+    }
+  }
+  while (static_cast<double>(s.num_u()) * s.num_v() < control_points) {
+    const std::vector<double> bu = s.U().breakpoints(), bv = s.V().breakpoints();
+    const double span_u = Lu * (d.u1 - d.u0) / static_cast<double>(bu.size() - 1);
+    const double span_v = Lv * (d.v1 - d.v0) / static_cast<double>(bv.size() - 1);
+    if (span_u >= span_v) {
+      s = nurbs::refine_knots_u(s, flagged_span_midpoints(bu, std::vector<char>(bu.size() - 1, 1)));
+    } else {
+      s = nurbs::refine_knots_v(s, flagged_span_midpoints(bv, std::vector<char>(bv.size() - 1, 1)));
+    }
+  }
+  return s;
+}
+
+// The adaptive fit from one start (see fit_surface); `used`: the points with weight > 0.
+AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> points,
+                              std::span<const SurfaceParameter> params, std::span<const double> weights,
+                              const AdaptiveFitOptions& options, std::size_t used);
+
 }  // namespace
 
 LocalSpread::LocalSpread(const AdaptiveFitResult& fit)
@@ -183,10 +214,28 @@ double robust_noise_sigma(std::span<const double> residuals, std::span<const dou
 AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> points,
                               std::span<const SurfaceParameter> params, std::span<const double> weights,
                               const AdaptiveFitOptions& options) {
-  AdaptiveFitResult result{.status = AdaptiveFitResult::Status::NotDone, .surface = start};
-  std::vector<SurfaceParameter> t(params.begin(), params.end());
   std::size_t used = 0;
   for (std::size_t k = 0; k < points.size(); ++k) used += weights.empty() || (k < weights.size() && weights[k] > 0.0);
+  AdaptiveFitResult from_start = refine_from(start, points, params, weights, options, used);
+  // See AdaptiveFitOptions::dense_start_points_per_control_point.
+  const double k = options.dense_start_points_per_control_point;
+  if (!(k > 0.0) || !from_start.fitted() || !from_start.thin_misfit_seen) return from_start;
+  const Surface dense = uniformly_refined(start, static_cast<double>(used) / k);
+  if (dense.num_u() * dense.num_v() == start.num_u() * start.num_v()) return from_start;
+  AdaptiveFitResult from_dense = refine_from(dense, points, params, weights, options, used);
+  if (!from_dense.fitted() || !(from_dense.cv_score < from_start.cv_score)) return from_start;
+  from_dense.dense_start = true;
+  from_dense.thin_misfit_seen = true;
+  return from_dense;
+}
+
+namespace {
+
+AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> points,
+                              std::span<const SurfaceParameter> params, std::span<const double> weights,
+                              const AdaptiveFitOptions& options, std::size_t used) {
+  AdaptiveFitResult result{.status = AdaptiveFitResult::Status::NotDone, .surface = start};
+  std::vector<SurfaceParameter> t(params.begin(), params.end());
   // The knots so far on the start's exact shape: what each round's fit penalises the displacement from (never
   // the last round's fit, which would make the final surface a cascade of fits whose variance the last one's
   // hat matrix does not describe).
@@ -208,9 +257,14 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   PenalizedFitOptions fit_options = options.fit;
   // While refinement is tried (see below): the last fit kept, and its cross-validation score.
   bool trying = false;
+  bool thin_misfit_seen = false;  // AdaptiveFitResult::thin_misfit_seen
   std::optional<AdaptiveFitResult> kept;
   double kept_cv = std::numeric_limits<double>::infinity();
   auto undone = [&](const PenalizedFitResult& fit) { return trying && (!fit.ok() || !(fit.cv_score < kept_cv)); };
+  auto restored = [&] {
+    kept->thin_misfit_seen = thin_misfit_seen;
+    return std::move(*kept);
+  };
   auto fit_once = [&](const PenalizedFitOptions& o) {
     return basis ? fit_penalized(*basis, points, t, weights, o, span_weight)
                  : fit_penalized(target, points, t, weights, o, span_weight);
@@ -220,7 +274,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     // A round tried (see below) whose fit predicts left-out points no better is undone: judged before the
     // parameter corrections (the points' parameters are those the kept fit was scored with), so that a refinement
     // undone costs one fit, not three, and again after them.
-    if (undone(fit)) return std::move(*kept);
+    if (undone(fit)) return restored();
     for (int c = 0; c < options.parameter_corrections && fit.ok(); ++c) {
       t = correct_parameters(fit.surface, points, t);
       // The points moved along the surface by a fraction of their spacing: the smoothing is sought within
@@ -235,7 +289,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
       }
       fit = fit_once(near);
     }
-    if (undone(fit)) return std::move(*kept);
+    if (undone(fit)) return restored();
     if (!fit.ok()) {
       result.status = fit.status == PenalizedFitResult::Status::NotDone ? AdaptiveFitResult::Status::NotDone
                                                                         : AdaptiveFitResult::Status::NumericalError;
@@ -244,6 +298,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     const int unknowns = basis ? basis->unknowns : target.num_u() * target.num_v();
 
     result.surface = fit.surface;
+    result.cv_score = fit.cv_score;
     result.params = t;
     AlongNormal along = along_normal(fit.surface, points, t, fit.smoothing_bias);
     fit.smoothing_bias = {};  // along the normal from here on (a million points: 24 MB freed)
@@ -414,6 +469,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     };
     auto finish = [&](AdaptiveFitResult::Status status) {
       complete(result, status);
+      result.thin_misfit_seen = thin_misfit_seen;
       return std::move(result);
     };
     // Every span is consistent with the noise estimate; but a misfit spread thin over the face (a wave over all
@@ -432,6 +488,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
         options.fit.cross_validation == CrossValidation::LeaveOneOut &&
         ((std::isfinite(local) && spread > local) ||
          correlated_beyond_the_fit(local_noise, result.residuals, fit))) {
+      thin_misfit_seen = true;
       for (std::size_t a = 0; a < nsu; ++a) {
         for (std::size_t b = 0; b < nsv; ++b) {
           const std::size_t s = a * nsv + b;
@@ -607,5 +664,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
     result.rounds = round + 1;
   }
 }
+
+}  // namespace
 
 }  // namespace probecomp::fitting
