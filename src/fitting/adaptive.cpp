@@ -140,6 +140,11 @@ std::vector<double> span_spread(std::span<const double> standardised, std::span<
   return by_span;
 }
 
+// The finer start (AdaptiveFitOptions::dense_start_points_per_control_point) holds at most this many control
+// points: a face of a million points would otherwise start at 62 500, band matrices of gigabytes. The shape suite's
+// faces (6 000–7 000 points) start at 375–440; its largest fits end at about 3 000.
+constexpr double kMaxDenseStartControlPoints = 4096.0;
+
 // `s` with every knot span halved, in the direction whose spans are longer (millimetres along the surface), until it
 // has at least `control_points` control points: the same shape on a finer net.
 Surface uniformly_refined(Surface s, double control_points) {
@@ -220,7 +225,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   // See AdaptiveFitOptions::dense_start_points_per_control_point.
   const double k = options.dense_start_points_per_control_point;
   if (!(k > 0.0) || !from_start.fitted() || !from_start.thin_misfit_seen) return from_start;
-  const Surface dense = uniformly_refined(start, static_cast<double>(used) / k);
+  const Surface dense = uniformly_refined(start, std::min(static_cast<double>(used) / k, kMaxDenseStartControlPoints));
   if (dense.num_u() * dense.num_v() == start.num_u() * start.num_v()) return from_start;
   AdaptiveFitResult from_dense = refine_from(dense, points, params, weights, options, used);
   if (!from_dense.fitted() || !(from_dense.cv_score < from_start.cv_score)) return from_start;

@@ -93,9 +93,9 @@ struct AdaptiveFitOptions {
   // those fits, so it is not the default. At 0, S27 and S28's worst regions fall to 63 and 67 %.
   double local_refinement_min_cover = 2.0;
   // Where the residuals showed a misfit spread thin over the face (AdaptiveFitResult::thin_misfit_seen), the fit is
-  // made again from `start` with its knot spans halved until it has a control point for at most this many points,
-  // and of the two the one whose cross-validation score is lower is taken (0: never). Refinement follows what the
-  // span tests see; a misfit of a fraction of σ over much of the face (a broad bulge, a wave over all of it) they
+  // made again from `start` with its knot spans halved until it has a control point for at most this many points
+  // (or 4 096 control points), and of the two the one whose cross-validation score is lower is taken (0: never).
+  // Refinement follows what the span tests see; a misfit of a fraction of σ over much of the face (a broad bulge, a wave over all of it) they
   // do not see, nor does u, which then promises what the fit does not hold (a cylinder with a broad bulge, 6 000
   // random points at σ = 4.5 µm, one draw of its noise: 80 control points at the end, worst region's ±2u coverage
   // 34 %). From a finer start the penalty holds the variance; but a narrow feature among smooth regions is followed
