@@ -5,7 +5,9 @@
 // whose residuals the noise does not explain; repeat until every span is consistent with the noise, the data
 // can support no more control points, or the rounds run out. Where every span is consistent but the residuals
 // still show a misfit thin over the face (their spread above the local noise estimate, or neighbouring residuals
-// correlated), refinement is tried, and each round tried is kept only if it predicts left-out points better.
+// correlated), refinement is tried, and each round tried is kept only if it predicts left-out points better; and
+// the whole fit is made again from the start's knot spans halved, the one that predicts them better taken
+// (AdaptiveFitOptions::dense_start_points_per_control_point).
 
 #include <cstdint>
 #include <limits>
