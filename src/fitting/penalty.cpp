@@ -24,7 +24,8 @@ constexpr std::array<double, 5> kGaussWeights = {0.2369268850561891, 0.478628670
 }  // namespace
 
 // The thin-plate energy's matrix G: Σ_spans φ_s ∫∫_span (R_ss R_ssᵀ + 2 R_st R_stᵀ + R_tt R_ttᵀ) ds dt, s = L_u·u,
-// t = L_v·v, by 5 × 5 Gauss points per span. Chunks of u spans in a fixed number, summed in order.
+// t = L_v·v, by 5 × 5 Gauss points per span. Chunks of spans of the unknowns' outer direction in a fixed number,
+// summed in order.
 // With `D` (n × 3, the displacement of the control net) it also writes each span's roughness of that
 // displacement (its energy over the span's area) to `roughness` and builds no matrix.
 ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span<const double> span_weights,
@@ -53,7 +54,24 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
   }
   // ds dt = Lu Lv du dv; d_ss = d_uu / Lu², d_st = d_uv / (Lu Lv), d_tt = d_vv / Lv².
   const double cuu = Lu * Lv / std::pow(Lu, 4), cuv = 2.0 * Lu * Lv / (Lu * Lu * Lv * Lv), cvv = Lu * Lv / std::pow(Lv, 4);
-  const int chunks = std::min(nsu, 8);
+  // Each span's knot span index in U (a) and in V (e).
+  std::vector<int> span_u(static_cast<std::size_t>(nsu)), span_v(static_cast<std::size_t>(nsv));
+  for (int a = 0; a < nsu; ++a) {
+    span_u[static_cast<std::size_t>(a)] =
+        s.U().find_span(0.5 * (bu[static_cast<std::size_t>(a)] + bu[static_cast<std::size_t>(a) + 1]));
+  }
+  for (int e = 0; e < nsv; ++e) {
+    span_v[static_cast<std::size_t>(e)] =
+        s.V().find_span(0.5 * (bv[static_cast<std::size_t>(e)] + bv[static_cast<std::size_t>(e) + 1]));
+  }
+  // The chunks split the spans of the unknowns' outer direction (u when v is inner, else v), each chunk taking every
+  // span of the other direction: its functions' unknowns are then one narrow run of rows (a THB basis's unknowns
+  // are in the same order: hierarchical.cpp). Split along the inner direction, every chunk would reach nearly every
+  // row (the million-point benchmark's 171 × 177 net, u inner, at half-bandwidth 516: 24 nearly whole bands, 3 GB).
+  // A span is (outer o, inner x) in the loops, (a, e) in u and v.
+  const bool outer_u = order.v_inner;
+  const int n_outer = outer_u ? nsu : nsv, n_inner = outer_u ? nsv : nsu;
+  const int chunks = std::min(n_outer, 8);
   std::vector<ThinPlateTerms> parts(static_cast<std::size_t>(chunks));
   if (roughness) roughness->assign(static_cast<std::size_t>(nsu) * nsv, 0.0);
   // Each chunk's terms cover only the band's rows its spans' functions reach, rows [row0, row0 + rows) held from 0:
@@ -63,10 +81,10 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
   tbb::parallel_for(0, chunks, [&](int c) {
     int& lo = row0[static_cast<std::size_t>(c)];
     int& hi = row1[static_cast<std::size_t>(c)];
-    for (int a = nsu * c / chunks; a < nsu * (c + 1) / chunks; ++a) {
-      const int i0 = s.U().find_span(0.5 * (bu[static_cast<std::size_t>(a)] + bu[static_cast<std::size_t>(a) + 1])) - p;
-      for (int e = 0; e < nsv; ++e) {
-        const int j0 = s.V().find_span(0.5 * (bv[static_cast<std::size_t>(e)] + bv[static_cast<std::size_t>(e) + 1])) - q;
+    for (int o = n_outer * c / chunks; o < n_outer * (c + 1) / chunks; ++o) {
+      for (int x = 0; x < n_inner; ++x) {
+        const int a = outer_u ? o : x, e = outer_u ? x : o;
+        const int i0 = span_u[static_cast<std::size_t>(a)] - p, j0 = span_v[static_cast<std::size_t>(e)] - q;
         if (thb) {
           const auto cell = static_cast<std::size_t>(i0 * s.num_v() + j0);
           lo = std::min(lo, thb->cell_unknowns[static_cast<std::size_t>(thb->cell_first[cell])]);
@@ -81,6 +99,10 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
       }
     }
   });
+  // The first chunk's terms hold every row, and the others are summed into them: no three whole bands more beside
+  // the chunks' (the million-point benchmark's at half-bandwidth 516: 125 MB a band).
+  row0[0] = 0;
+  row1[0] = n - 1;
   tbb::parallel_for(0, chunks, [&](int c) {
     ThinPlateTerms& G = parts[static_cast<std::size_t>(c)];
     const int shift = row0[static_cast<std::size_t>(c)];
@@ -92,15 +114,16 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
     std::vector<double> uu(static_cast<std::size_t>(m_max)), uv(uu), vv(uu);
     int* idx = idx_store.data();
     int m = (p + 1) * (q + 1);
-    for (int a = nsu * c / chunks; a < nsu * (c + 1) / chunks; ++a) {
-      const double ua = bu[static_cast<std::size_t>(a)], ub = bu[static_cast<std::size_t>(a) + 1];
-      const int su = s.U().find_span(0.5 * (ua + ub));
-      for (int e = 0; e < nsv; ++e) {
+    for (int o = n_outer * c / chunks; o < n_outer * (c + 1) / chunks; ++o) {
+      for (int x = 0; x < n_inner; ++x) {
+        const int a = outer_u ? o : x, e = outer_u ? x : o;
+        const double ua = bu[static_cast<std::size_t>(a)], ub = bu[static_cast<std::size_t>(a) + 1];
+        const int su = span_u[static_cast<std::size_t>(a)];
         const double phi = D ? 1.0 : span_weights.empty() ? 1.0 : span_weights[static_cast<std::size_t>(a) * nsv + e];
         if (phi == 0.0) continue;
         double energy = 0.0;
         const double va = bv[static_cast<std::size_t>(e)], vb = bv[static_cast<std::size_t>(e) + 1];
-        const int sv = s.V().find_span(0.5 * (va + vb));
+        const int sv = span_v[static_cast<std::size_t>(e)];
         const double jac = 0.25 * (ub - ua) * (vb - va) * phi;
         for (std::size_t gu = 0; gu < kGaussNodes.size(); ++gu) {
           const double u = 0.5 * (ua + ub) + 0.5 * (ub - ua) * kGaussNodes[gu];
@@ -145,17 +168,19 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
     }
   });
   if (D) return {};
-  // The chunks' rows summed in chunk order, as whole bands would be.
-  ThinPlateTerms G{Band(n, b), Band(n, b), Band(n, b)};
+  // The chunks' rows summed in chunk order, as whole bands would be, into the first chunk's whole bands; each
+  // chunk freed once added.
+  ThinPlateTerms G = std::move(parts[0]);
   const std::size_t stride = static_cast<std::size_t>(b) + 1;
-  for (int c = 0; c < chunks; ++c) {
-    const ThinPlateTerms& part = parts[static_cast<std::size_t>(c)];
+  for (int c = 1; c < chunks; ++c) {
+    ThinPlateTerms& part = parts[static_cast<std::size_t>(c)];
     const std::size_t at = static_cast<std::size_t>(row0[static_cast<std::size_t>(c)]) * stride;
     for (std::size_t k = 0; k < part.uu.a.size(); ++k) {
       G.uu.a[at + k] += part.uu.a[k];
       G.uv.a[at + k] += part.uv.a[k];
       G.vv.a[at + k] += part.vv.a[k];
     }
+    part = ThinPlateTerms{};
   }
   return G;
 }
