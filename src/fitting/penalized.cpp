@@ -231,7 +231,7 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
   const int n = maker.n;
   const int b = maker.bandwidth();
   // The penalty's spans are the tensor surface's (with a hierarchical basis, its output surface's): each THB function
-  // is one polynomial there. The fitted displacement's roughness is measured on the tensor control net.
+  // is one polynomial there. The fitted displacement's energy per span is measured on the tensor control net.
   const int b_tensor = std::min(order.bandwidth(start.p(), start.q()), nu * nv - 1);
   auto penalty = [&] { return thin_plate_energy(start, order, b, span_weights, nullptr, nullptr, thb); };
   // The penalty's matrix is made side by side with the cross-validation's rows and the data's normal equations, each
@@ -377,7 +377,7 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
     }
   }
   result.surface = Surface(start.U(), start.V(), std::move(Pw));
-  (void)thin_plate_energy(start, order, b_tensor, {}, &D_net, &result.span_roughness);
+  (void)thin_plate_energy(start, order, b_tensor, {}, &D_net, &result.span_energy);
   result.log10_smoothing = best.log10_smoothing;
   result.log10_anisotropy = best.log10_anisotropy;
   result.lambda = best.lambda;

@@ -23,35 +23,36 @@ constexpr std::array<double, 5> kGaussWeights = {0.2369268850561891, 0.478628670
 
 }  // namespace
 
+MeanSpeeds mean_speeds(const Surface& s) {
+  double Lu = 0.0, Lv = 0.0;
+  const nurbs::Domain d = s.domain();
+  constexpr int kSamples = 9;
+  for (int a = 0; a < kSamples; ++a) {
+    for (int c = 0; c < kSamples; ++c) {
+      const nurbs::SurfaceD1 e = nurbs::derivatives_d1(s, d.u0 + (d.u1 - d.u0) * (a + 0.5) / kSamples,
+                                                       d.v0 + (d.v1 - d.v0) * (c + 0.5) / kSamples);
+      Lu += e.Su.norm();
+      Lv += e.Sv.norm();
+    }
+  }
+  return {std::max(Lu / (kSamples * kSamples), 1e-12), std::max(Lv / (kSamples * kSamples), 1e-12)};
+}
+
 // The thin-plate energy's matrix G: Σ_spans φ_s ∫∫_span (R_ss R_ssᵀ + 2 R_st R_stᵀ + R_tt R_ttᵀ) ds dt, s = L_u·u,
 // t = L_v·v, by 5 × 5 Gauss points per span. Chunks of spans of the unknowns' outer direction in a fixed number,
 // summed in order.
-// With `D` (n × 3, the displacement of the control net) it also writes each span's roughness of that
-// displacement (its energy over the span's area) to `roughness` and builds no matrix.
+// With `D` (n × 3, the displacement of the control net) it writes each span's isotropic energy of that displacement,
+// Dᵀ G_span D (θ = 1, unweighted), to `span_energy` instead and builds no matrix.
 ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b, std::span<const double> span_weights,
-                                 const std::vector<double>* D, std::vector<double>* roughness,
+                                 const std::vector<double>* D, std::vector<double>* span_energy,
                                  const HierarchicalBasis* thb) {
   const int n = thb ? thb->unknowns : s.num_u() * s.num_v();
   const int p = s.p(), q = s.q();
   const std::vector<double> bu = s.U().breakpoints();
   const std::vector<double> bv = s.V().breakpoints();
   const int nsu = static_cast<int>(bu.size()) - 1, nsv = static_cast<int>(bv.size()) - 1;
-  // The mean speeds: millimetres per unit of u and of v.
-  double Lu = 0.0, Lv = 0.0;
-  {
-    const nurbs::Domain d = s.domain();
-    constexpr int kSamples = 9;
-    for (int a = 0; a < kSamples; ++a) {
-      for (int c = 0; c < kSamples; ++c) {
-        const nurbs::SurfaceD1 e = nurbs::derivatives_d1(s, d.u0 + (d.u1 - d.u0) * (a + 0.5) / kSamples,
-                                                         d.v0 + (d.v1 - d.v0) * (c + 0.5) / kSamples);
-        Lu += e.Su.norm();
-        Lv += e.Sv.norm();
-      }
-    }
-    Lu = std::max(Lu / (kSamples * kSamples), 1e-12);
-    Lv = std::max(Lv / (kSamples * kSamples), 1e-12);
-  }
+  const MeanSpeeds speeds = mean_speeds(s);
+  const double Lu = speeds.u, Lv = speeds.v;
   // ds dt = Lu Lv du dv; d_ss = d_uu / Lu², d_st = d_uv / (Lu Lv), d_tt = d_vv / Lv².
   const double cuu = Lu * Lv / std::pow(Lu, 4), cuv = 2.0 * Lu * Lv / (Lu * Lu * Lv * Lv), cvv = Lu * Lv / std::pow(Lv, 4);
   // Each span's knot span index in U (a) and in V (e).
@@ -73,7 +74,7 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
   const int n_outer = outer_u ? nsu : nsv, n_inner = outer_u ? nsv : nsu;
   const int chunks = std::min(n_outer, 8);
   std::vector<ThinPlateTerms> parts(static_cast<std::size_t>(chunks));
-  if (roughness) roughness->assign(static_cast<std::size_t>(nsu) * nsv, 0.0);
+  if (span_energy) span_energy->assign(static_cast<std::size_t>(nsu) * nsv, 0.0);
   // Each chunk's terms cover only the band's rows its spans' functions reach, rows [row0, row0 + rows) held from 0:
   // the same sums, without eight whole bands of three terms each (a THB face of 5 400 unknowns at half-bandwidth
   // 386: 400 MB, zeroed).
@@ -162,8 +163,7 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
             G.vv.add_outer(shifted.data(), Rvv, m, w * cvv);
           }
         }
-        // The span's area in mm²: its parameter area times Lu·Lv (jac holds a quarter of the parameter area).
-        if (D) (*roughness)[static_cast<std::size_t>(a) * nsv + e] = energy / (4.0 * jac * Lu * Lv);
+        if (D) (*span_energy)[static_cast<std::size_t>(a) * nsv + e] = energy;
       }
     }
   });

@@ -40,10 +40,15 @@ struct AdaptiveFitOptions {
   // ... and this floor where the noise estimate is at noise_floor (exact data), where every span the fit misses by
   // more than a tenth of a micrometre is unexplained (compensation::fit_faces raises it on a scanning probe's lines).
   double min_span_weight_noise_free = 1e-6;
-  // The spatially adaptive penalty's exponent (see fit_surface). Measured on the free-form case with a 19° dent,
-  // σ = 4.5 µm: largest error 13.1 µm at 0.5, 9.6–10.9 µm at 1, 9.8 µm at 2 with the flat panel's largest error
-  // lowest at 2 (7.9 µm against 9.2–9.9 µm).
-  double roughness_power = 2.0;
+  // How the penalty's weight varies over the face between rounds (see fit_surface): from the fit's roughness alone,
+  // or from the local balance of data and penalty (restricted maximum likelihood's, for a penalty per neighbourhood
+  // of spans; on scan lines and exact data the roughness rule is used whatever this says). The balance is more
+  // accurate on the shape suite's grids and random points (89 faces at σ = 1.5–10 µm: std median 1.216 -> 1.057 µm,
+  // 45 better by 2 % or more and 4 worse; docs/accuracy.md) but not yet safe: on the paper's grid with 1 % gross
+  // errors it let the fit swing at the dent (σ = 0.5 µm: a worst error of 126.6 µm against 1.1 µm; σ = 1.5 µm: a
+  // contact 242 µm off at 170 u, a moved point missed). So it is not the default.
+  enum class SpatialPenalty { Roughness, Balance };
+  SpatialPenalty spatial_penalty = SpatialPenalty::Roughness;
   // A span with fewer points is not split (its quarters would hold one or none). Four: a narrow dent in a grid of
   // points about a third of its width apart needs spans that hold only a few (measured on the free-form case: a
   // dent of σ = 1.5 mm, 0.84 mm grid: largest error 21 µm with 8, 7.9 µm with 4).

@@ -88,10 +88,10 @@ struct PenalizedFitResult {
   // this (Wahba's Bayesian posterior variance, which also covers the smoothing bias on average: Nychka 1988);
   // w_k times this is the point's hat diagonal (its leverage). Defined for left-out points too.
   std::vector<double> variance_factor{};
-  // Per knot span (a·(V spans) + b): the thin-plate energy of the fitted displacement over the span divided by
-  // the span's area (mm⁻²·mm² per mm²: its mean squared curvature), the roughness a spatially adaptive penalty
-  // follows.
-  std::vector<double> span_roughness{};
+  // Per knot span (a·(V spans) + b): the isotropic thin-plate energy of the fitted displacement over the span,
+  // D̂ᵀ G_span D̂ with θ = 1 and without the span's weight (mm²·mm⁻⁴·mm²): what a spatially adaptive penalty follows
+  // (fit_surface).
+  std::vector<double> span_energy{};
   // Per point: the fit's smoothing bias there (the fitted point's expected error due to the penalty), estimated
   // by −λ·R(u,v)ᵀ(AᵀWA + λG)⁻¹·G·D̃, mm, with D̃ = D̂ corrected by passes of the same estimate (see fit_penalized).
   std::vector<Vector3> smoothing_bias{};

@@ -2,6 +2,7 @@
 // Knot-span helpers shared by the refining fitters (offset_surface, fit_surface) and the simulator's refinement.
 
 #include <algorithm>
+#include <cstddef>
 #include <vector>
 
 namespace probecomp::fitting {
@@ -43,6 +44,15 @@ namespace probecomp::fitting {
   }
   t.push_back(breaks.back());
   return t;
+}
+
+// Calls f(s2) for span (a, b) of an nsu × nsv grid of spans (u-major) and each of its (up to) eight neighbours:
+// the neighbourhood the span tests, the bias estimate, the local spread and the penalty weights pool over.
+template <typename F>
+void for_each_around(std::size_t a, std::size_t b, std::size_t nsu, std::size_t nsv, F&& f) {
+  for (std::size_t a2 = a > 0 ? a - 1 : 0; a2 <= std::min(a + 1, nsu - 1); ++a2) {
+    for (std::size_t b2 = b > 0 ? b - 1 : 0; b2 <= std::min(b + 1, nsv - 1); ++b2) f(a2 * nsv + b2);
+  }
 }
 
 }  // namespace probecomp::fitting
