@@ -37,8 +37,8 @@ struct MeanSpeeds {
 
 // The thin-plate energy's three terms for the unknowns in `order` (half-bandwidth b), each span weighted by
 // span_weights (none: 1); with `D`, each span's isotropic energy Dᵀ G_span D of D in `span_energy` instead,
-// unweighted (penalty.cpp; D on s's own control net, in `order`). With `thb` (s its output surface), the terms are for the THB
-// unknowns instead: each basis row mapped to them (hierarchical.hpp).
+// unweighted (penalty.cpp; D on s's own control net, in `order`). With `thb` (s its output surface), the terms are
+// for the THB unknowns instead: each basis row mapped to them (hierarchical.hpp).
 ThinPlateTerms thin_plate_energy(const nurbs::Surface& s, const Ordering& order, int b,
                                  std::span<const double> span_weights, const std::vector<double>* D = nullptr,
                                  std::vector<double>* span_energy = nullptr, const HierarchicalBasis* thb = nullptr);

@@ -43,10 +43,11 @@ struct AdaptiveFitOptions {
   // How the penalty's weight varies over the face between rounds (see fit_surface): from the fit's roughness alone,
   // or from the local balance of data and penalty (restricted maximum likelihood's, for a penalty per neighbourhood
   // of spans; on scan lines and exact data the roughness rule is used whatever this says). The balance is more
-  // accurate on the shape suite's grids and random points (89 faces at σ = 1.5–10 µm: std median 1.216 -> 1.057 µm,
-  // 45 better by 2 % or more and 4 worse; docs/accuracy.md) but not yet safe: on the paper's grid with 1 % gross
-  // errors it let the fit swing at the dent (σ = 0.5 µm: a worst error of 126.6 µm against 1.1 µm; σ = 1.5 µm: a
-  // contact 242 µm off at 170 u, a moved point missed). So it is not the default.
+  // accurate on the shape suite's grids and random points (63 faces at σ = 1.5–10 µm: std median 1.216 -> 1.057 µm,
+  // 42 better by 2 % or more and 5 worse; docs/accuracy.md) but not yet safe: on the paper's grid with 1 % gross
+  // errors it can let the fit follow them, and whether it does turns on small changes (worst errors of 85–127 µm
+  // at σ = 0.5 µm against 1.1–1.7 µm; once a contact 242 µm off at 170 u at σ = 1.5 µm, a moved point missed). So
+  // it is not the default.
   enum class SpatialPenalty { Roughness, Balance };
   SpatialPenalty spatial_penalty = SpatialPenalty::Roughness;
   // A span with fewer points is not split (its quarters would hold one or none). Four: a narrow dent in a grid of
