@@ -79,7 +79,11 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
   // the same sums, without eight whole bands of three terms each (a THB face of 5 400 unknowns at half-bandwidth
   // 386: 400 MB, zeroed).
   std::vector<int> row0(static_cast<std::size_t>(chunks), n), row1(static_cast<std::size_t>(chunks), -1);
-  tbb::parallel_for(0, chunks, [&](int c) {
+  // The first chunk's terms hold every row, and the others are summed into them: no three whole bands more beside
+  // the chunks' (the million-point benchmark's at half-bandwidth 516: 125 MB a band).
+  row0[0] = 0;
+  row1[0] = n - 1;
+  tbb::parallel_for(1, chunks, [&](int c) {
     int& lo = row0[static_cast<std::size_t>(c)];
     int& hi = row1[static_cast<std::size_t>(c)];
     for (int o = n_outer * c / chunks; o < n_outer * (c + 1) / chunks; ++o) {
@@ -100,10 +104,6 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
       }
     }
   });
-  // The first chunk's terms hold every row, and the others are summed into them: no three whole bands more beside
-  // the chunks' (the million-point benchmark's at half-bandwidth 516: 125 MB a band).
-  row0[0] = 0;
-  row1[0] = n - 1;
   tbb::parallel_for(0, chunks, [&](int c) {
     ThinPlateTerms& G = parts[static_cast<std::size_t>(c)];
     const int shift = row0[static_cast<std::size_t>(c)];

@@ -1,6 +1,6 @@
 #pragma once
 // The spatially adaptive penalty's weight per knot span (span_weights.cpp), set between the adaptive fit's rounds
-// from the last fit (fit_surface). Each rule's weights are in (floor, 1], 1 the face's full penalty, u-major
+// from the last fit (fit_surface). Each rule's weights are in [floor, 1], 1 the face's full penalty, u-major
 // (a·nsv + b). Private to fitting/.
 
 #include <cstddef>

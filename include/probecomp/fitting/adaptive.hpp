@@ -103,10 +103,10 @@ struct AdaptiveFitOptions {
   // Where the residuals showed a misfit spread thin over the face (AdaptiveFitResult::thin_misfit_seen), the fit is
   // made again from `start` with its knot spans halved until it has a control point for at most this many points
   // (or 4 096 control points), and of the two the one whose cross-validation score is lower is taken (0: never).
-  // Refinement follows what the span tests see; a misfit of a fraction of σ over much of the face (a broad bulge, a wave over all of it) they
-  // do not see, nor does u, which then promises what the fit does not hold (a cylinder with a broad bulge, 6 000
-  // random points at σ = 4.5 µm, one draw of its noise: 80 control points at the end, worst region's ±2u coverage
-  // 34 %). From a finer start the penalty holds the variance; but a narrow feature among smooth regions is followed
+  // Refinement follows what the span tests see; a misfit of a fraction of σ over much of the face (a broad bulge, a
+  // wave over all of it) they do not see, nor does u, which then promises what the fit does not hold (a cylinder
+  // with a broad bulge, 6 000 random points at σ = 4.5 µm, one draw of its noise: 80 control points at the end,
+  // worst region's ±2u coverage 34 %). From a finer start the penalty holds the variance; but a narrow feature among smooth regions is followed
   // better from the coarse start, whose lines go through it alone, so neither start is right on its own. Measured
   // (probecomp_shape_suite --no-reference, the suite and 64 unseen draws, 94 faces): 30 faces showed such a misfit;
   // std better by 2 % or more on 17 and worse on 1; the lowest ±2u coverage overall 85.1 -> 92.6 %; faces whose
