@@ -44,10 +44,10 @@ struct AdaptiveFitOptions {
   // or from the local balance of data and penalty (restricted maximum likelihood's, for a penalty per neighbourhood
   // of spans; on scan lines and exact data the roughness rule is used whatever this says). The balance is more
   // accurate on the shape suite's grids and random points (63 faces at σ = 1.5–10 µm: std median 1.216 -> 1.057 µm,
-  // 42 better by 2 % or more and 5 worse; docs/accuracy.md) but not yet safe: on the paper's grid with 1 % gross
-  // errors it can let the fit follow them, and whether it does turns on small changes (worst errors of 85–127 µm
-  // at σ = 0.5 µm against 1.1–1.7 µm; once a contact 242 µm off at 170 u at σ = 1.5 µm, a moved point missed). So
-  // it is not the default.
+  // 42 better by 2 % or more and 5 worse; docs/accuracy.md). Given gross errors it lets the fit follow them, so
+  // compensation::fit_faces judges them on a fit with the roughness rule and uses the balance only for the refits
+  // made without them. Not the default: that costs a second fit on every face, and where the balanced fit misses
+  // a broad bulge u does not cover it (D207: the worst region's ±2u coverage 93.2 -> 43.4 %).
   enum class SpatialPenalty { Roughness, Balance };
   SpatialPenalty spatial_penalty = SpatialPenalty::Roughness;
   // A span with fewer points is not split (its quarters would hold one or none). Four: a narrow dent in a grid of
