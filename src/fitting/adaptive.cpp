@@ -17,7 +17,9 @@
 #include "probecomp/geometry/statistics.hpp"
 
 #include "hierarchy_marks.hpp"
+#include "nets.hpp"
 #include "penalty.hpp"
+#include "representation_bias.hpp"
 #include "span_weights.hpp"
 
 namespace probecomp::fitting {
@@ -28,29 +30,6 @@ using nurbs::Surface;
 
 using geometry::kMadToSigma;
 using geometry::median_in_place;
-
-// Each point's signed residual along the fit's unit normal at its parameters, and the size of the fit's smoothing
-// bias there along the same normal (one evaluation of the surface serves both).
-struct AlongNormal {
-  std::vector<double> residual, bias;
-};
-AlongNormal along_normal(const Surface& s, std::span<const Point3> points, std::span<const SurfaceParameter> params,
-                         std::span<const Vector3> smoothing_bias) {
-  AlongNormal out{std::vector<double>(points.size()), std::vector<double>(points.size())};
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const auto& range) {
-    for (std::size_t k = range.begin(); k != range.end(); ++k) {
-      const nurbs::SurfaceD1 d = nurbs::derivatives_d1(s, params[k].u, params[k].v);
-      const Vector3 e = points[k] - d.S;
-      const nurbs::UnitNormal n = nurbs::unit_normal(s, params[k].u, params[k].v, d.Su, d.Sv);
-      // Where the surface has no normal, the whole gap is the residual (sign from nothing: positive), and the
-      // whole bias its size.
-      const bool degenerate = n.status == nurbs::UnitNormal::Status::Degenerate;
-      out.residual[k] = degenerate ? e.norm() : e.dot(n.n);
-      out.bias[k] = degenerate ? smoothing_bias[k].norm() : std::abs(smoothing_bias[k].dot(n.n));
-    }
-  });
-  return out;
-}
 
 // The residuals' spread gives way to the local prediction errors as the noise estimate above this multiple of them
 // (see fit_surface). Shape suite (--no-reference) and 48 unseen draws, against the nearest-neighbour differences
@@ -138,27 +117,6 @@ std::vector<double> span_spread(std::span<const double> standardised, std::span<
 // faces (6 000–7 000 points) start at 375–440; its largest fits end at about 3 000.
 constexpr double kMaxDenseStartControlPoints = 4096.0;
 
-// `s` with every knot span halved, in the direction whose spans are longer (millimetres along the surface), until it
-// has at least `control_points` control points, or as many as it can without passing kMaxDenseStartControlPoints:
-// the same shape on a finer net.
-Surface uniformly_refined(Surface s, double control_points) {
-  const detail::MeanSpeeds speed = detail::mean_speeds(s);
-  const nurbs::Domain d = s.domain();
-  while (static_cast<double>(s.num_u()) * s.num_v() < control_points) {
-    const std::vector<double> bu = s.U().breakpoints(), bv = s.V().breakpoints();
-    const double span_u = speed.u * (d.u1 - d.u0) / static_cast<double>(bu.size() - 1);
-    const double span_v = speed.v * (d.v1 - d.v0) / static_cast<double>(bv.size() - 1);
-    const bool along_u = span_u >= span_v;
-    // Halving a direction's spans adds one control point for each span.
-    const double next = along_u ? static_cast<double>(s.num_u() + static_cast<int>(bu.size()) - 1) * s.num_v()
-                                : static_cast<double>(s.num_v() + static_cast<int>(bv.size()) - 1) * s.num_u();
-    if (next > kMaxDenseStartControlPoints) break;
-    s = along_u ? nurbs::refine_knots_u(s, flagged_span_midpoints(bu, std::vector<char>(bu.size() - 1, 1)))
-                : nurbs::refine_knots_v(s, flagged_span_midpoints(bv, std::vector<char>(bv.size() - 1, 1)));
-  }
-  return s;
-}
-
 // The adaptive fit from one start (see fit_surface); `used`: the points with weight > 0.
 AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> points,
                               std::span<const SurfaceParameter> params, std::span<const double> weights,
@@ -210,16 +168,27 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   std::size_t used = 0;
   for (std::size_t k = 0; k < points.size(); ++k) used += weights.empty() || (k < weights.size() && weights[k] > 0.0);
   AdaptiveFitResult from_start = refine_from(start, points, params, weights, options, used);
+  // See AdaptiveFitOptions::representation_bias.
+  auto with_representation_bias = [&](AdaptiveFitResult r, const Surface& from) {
+    if (options.representation_bias && r.fitted()) detail::add_representation_bias(r, from, points, weights, options);
+    return r;
+  };
   // See AdaptiveFitOptions::dense_start_points_per_control_point.
   const double k = options.dense_start_points_per_control_point;
-  if (!(k > 0.0) || !from_start.fitted() || !from_start.thin_misfit_seen) return from_start;
-  const Surface dense = uniformly_refined(start, static_cast<double>(used) / k);
-  if (dense.num_u() * dense.num_v() == start.num_u() * start.num_v()) return from_start;
+  if (!(k > 0.0) || !from_start.fitted() || !from_start.thin_misfit_seen) {
+    return with_representation_bias(std::move(from_start), start);
+  }
+  const Surface dense = detail::uniformly_refined(start, static_cast<double>(used) / k, kMaxDenseStartControlPoints);
+  if (dense.num_u() * dense.num_v() == start.num_u() * start.num_v()) {
+    return with_representation_bias(std::move(from_start), start);
+  }
   AdaptiveFitResult from_dense = refine_from(dense, points, params, weights, options, used);
-  if (!from_dense.fitted() || !(from_dense.cv_score < from_start.cv_score)) return from_start;
+  if (!from_dense.fitted() || !(from_dense.cv_score < from_start.cv_score)) {
+    return with_representation_bias(std::move(from_start), start);
+  }
   from_dense.dense_start = true;
   from_dense.thin_misfit_seen = true;
-  return from_dense;
+  return with_representation_bias(std::move(from_dense), dense);
 }
 
 namespace {
@@ -291,9 +260,12 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
     const int unknowns = basis ? basis->unknowns : target.num_u() * target.num_v();
 
     result.surface = fit.surface;
+    result.span_weight = basis ? std::vector<double>{} : span_weight;
+    result.log10_anisotropy = fit.log10_anisotropy;
+    result.lambda = fit.lambda;
     result.cv_score = fit.cv_score;
     result.params = t;
-    AlongNormal along = along_normal(fit.surface, points, t, fit.smoothing_bias);
+    detail::AlongNormal along = detail::along_normal(fit.surface, points, t, fit.smoothing_bias);
     fit.smoothing_bias = {};  // along the normal from here on (a million points: 24 MB freed)
     result.residuals = std::move(along.residual);
     result.control_points = unknowns;

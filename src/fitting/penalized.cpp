@@ -295,7 +295,9 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
   };
   // Each trial keeps its factor and its band inverse, so the best one is used as it is, not evaluated again.
   Trial best;
-  if (options.log10_smoothing) {
+  if (options.lambda) {
+    best = run(std::log10(*options.lambda * std::max(G_start.trace(), 1e-300) / data_trace), a0);
+  } else if (options.log10_smoothing) {
     best = run(*options.log10_smoothing, a0);
   } else {
     // A scan in decades, then golden sections of the best decade's two neighbours. A range no wider than two
@@ -337,7 +339,7 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
       }
     }
   }
-  if (options.log10_smoothing_offset != 0.0 && !options.log10_smoothing && best.ok) {
+  if (options.log10_smoothing_offset != 0.0 && !options.log10_smoothing && !options.lambda && best.ok) {
     const double moved = std::clamp(best.log10_smoothing + options.log10_smoothing_offset,
                                     options.min_log10_smoothing, options.max_log10_smoothing);
     Trial t = run(moved, best.log10_anisotropy);

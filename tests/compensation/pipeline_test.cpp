@@ -579,7 +579,7 @@ AgainstTruth against_truth(const compensation::CompensationResult& r, const cad:
 }
 
 // Issue 25 at every noise level: on the paper's grid (120 × 60) with 1 % of the points moved 0.1–5 mm, at σ = 0.5,
-// 1.5 and 4.5 µm, three seeds: every moved point is flagged, no other point is, and every other point's contact is
+// 1.5, 2.5 and 4.5 µm, three seeds: every moved point is flagged, no other point is, and every other point's contact is
 // within 5 stated uncertainties of the true part. It guards the first fit's verdict against the face's noise
 // (compensation/outliers.hpp): judged against the spread around each point like the refits, the first fit's pull
 // towards a cluster of errors hid a 0.674 mm error among them (σ = 4.5 µm, seed 1), which the refits then
@@ -587,14 +587,16 @@ AgainstTruth against_truth(const compensation::CompensationResult& r, const cad:
 // SpatialPenalty::Balance), which lets a fit follow gross errors and must not be used for the first verdict
 // (compensation/face_fits.cpp): used there, σ = 0.5 µm gave contacts 9.0 and 84.7 µm off (against 1.4 and 1.2
 // µm) and three good points flagged. Here the worst error is also bounded at 3 µm + 3σ: the balance's contacts
-// within 5 u were 85 µm off.
+// within 5 u were 85 µm off. At σ = 2.5 µm, seed 3, a point on the dent's rim was 5.95 µm off at 5.9 u, with or
+// without the gross errors: a bias of the net (fitting/representation_bias.hpp), now in its u (4.5 u; 4.8 u with
+// the balance).
 TEST(Pipeline, GrossOutliersAtLowAndHighNoise) {
   const PaperPanel panel(120, 60);
   using Penalty = fitting::AdaptiveFitOptions::SpatialPenalty;
   for (const Penalty penalty : {Penalty::Roughness, Penalty::Balance}) {
     compensation::CompensateOptions options = panel.options;
     options.fit.surface.spatial_penalty = penalty;
-    for (const double sigma : test::cases({0.0005, 0.0015, 0.0045})) {
+    for (const double sigma : test::cases({0.0005, 0.0015, 0.0025, 0.0045})) {
       for (const std::uint64_t seed : test::cases<std::uint64_t>({1u, 2u, 3u})) {
         SCOPED_TRACE(::testing::Message() << (penalty == Penalty::Balance ? "balance" : "roughness") << " sigma "
                                           << sigma << " seed " << seed);

@@ -248,6 +248,35 @@ TEST(FitPenalized, AWaveAlongOneDirectionIsFollowedBetterWithTheAnisotropyCrossV
   }
 }
 
+// PenalizedFitOptions::lambda, an absolute λ, is the same fit as the relative λ cross-validation chose on the same
+// net, and on a net with every span halved keeps that λ (the relative one moves with the net's traces).
+TEST(FitPenalized, AFixedAbsoluteLambdaIsTheFitOfThatLambda) {
+  const Surface truth = testing::random_rational_surface(11, {.nu = 7, .nv = 6});
+  const Samples data = isotropic_sample(truth, 2000, 0.004, 12);
+  PenalizedFitOptions chosen;
+  chosen.anisotropic = false;
+  const PenalizedFitResult by_cv = fit_penalized(truth, data.points, data.params, {}, chosen);
+  ASSERT_TRUE(by_cv.ok());
+  PenalizedFitOptions fixed = chosen;
+  fixed.lambda = by_cv.lambda;
+  const PenalizedFitResult again = fit_penalized(truth, data.points, data.params, {}, fixed);
+  ASSERT_TRUE(again.ok());
+  EXPECT_NEAR(again.lambda, by_cv.lambda, 1e-12 * by_cv.lambda);
+  EXPECT_NEAR(again.log10_smoothing, by_cv.log10_smoothing, 1e-12);
+  EXPECT_LE(worst_gap(again.surface, by_cv.surface), 1e-10);
+  auto midpoints = [](const std::vector<double>& b) {
+    std::vector<double> m;
+    for (std::size_t i = 0; i + 1 < b.size(); ++i) m.push_back(0.5 * (b[i] + b[i + 1]));
+    return m;
+  };
+  const Surface finer = nurbs::refine_knots_v(nurbs::refine_knots_u(truth, midpoints(truth.U().breakpoints())),
+                                              midpoints(truth.V().breakpoints()));
+  const PenalizedFitResult on_finer = fit_penalized(finer, data.points, data.params, {}, fixed);
+  ASSERT_TRUE(on_finer.ok());
+  EXPECT_NEAR(on_finer.lambda, by_cv.lambda, 1e-12 * by_cv.lambda);
+  EXPECT_GT(std::abs(on_finer.log10_smoothing - by_cv.log10_smoothing), 0.1);
+}
+
 TEST(FitPenalized, BadInputIsNotDone) {
   const Surface s = testing::random_rational_surface(1, {.nu = 5, .nv = 5});
   EXPECT_EQ(fit_penalized(s, {}, {}).status, PenalizedFitResult::Status::NotDone);

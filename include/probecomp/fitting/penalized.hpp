@@ -67,6 +67,9 @@ struct PenalizedFitOptions {
   // Decades added to the λ cross-validation chooses, for studies of that choice against the truth (shape_suite
   // --oracle); 0 in use.
   double log10_smoothing_offset = 0.0;
+  // A fixed absolute λ (PenalizedFitResult::lambda), overriding the above: a fit on a finer net with the smoothing
+  // of one already made (the relative λ is scaled by each net's traces).
+  std::optional<double> lambda;
 };
 
 struct LinearFit;  // penalized.cpp

@@ -1,0 +1,31 @@
+#pragma once
+// Knot nets of the adaptive fit and its residuals along the normal (nets.cpp). Private to fitting/.
+
+#include <span>
+#include <vector>
+
+#include "probecomp/fitting/least_squares.hpp"
+#include "probecomp/geometry/types.hpp"
+#include "probecomp/nurbs/surface.hpp"
+
+namespace probecomp::fitting::detail {
+
+// Each point's signed residual along the fit's unit normal at its parameters, and the size of the fit's smoothing
+// bias there along the same normal (one evaluation of the surface serves both; `smoothing_bias` may be empty).
+struct AlongNormal {
+  std::vector<double> residual, bias;
+};
+[[nodiscard]] AlongNormal along_normal(const nurbs::Surface& s, std::span<const Point3> points,
+                                       std::span<const SurfaceParameter> params,
+                                       std::span<const Vector3> smoothing_bias);
+
+// `s` with every knot span halved, in the direction whose spans are longer (millimetres along the surface), until it
+// has at least `control_points` control points, or as many as it can without passing `cap`: the same shape on a
+// finer net.
+[[nodiscard]] nurbs::Surface uniformly_refined(nurbs::Surface s, double control_points, double cap);
+
+// `start` with the knots of `fitted` it lacks inserted (each knot vector of `fitted` a refinement of the start's):
+// the start's shape on the fit's net.
+[[nodiscard]] nurbs::Surface on_net_of(const nurbs::Surface& start, const nurbs::Surface& fitted);
+
+}  // namespace probecomp::fitting::detail
