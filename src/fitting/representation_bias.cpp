@@ -18,8 +18,8 @@ namespace {
 // 200–500, --no-reference): faces with a region whose ±2u coverage is under 88 %, 33 -> 27 at 2, 25 at 4; the
 // lowest overall coverage 92.6 -> 96.0 % at 2; BM_Compensate10k 182 -> 218 ms at 2, 283 ms at 4.
 constexpr double kFinerNetFactor = 2.0;
-// Nor more than this many (a band of a few tens of MB): a face of a million points (30 000 control points) goes
-// without the check rather than double its memory.
+// Nor more than this many (a band of a few tens of MB): a face of a million points (the benchmark's: about 10 000
+// control points) goes without the check rather than double its memory.
 constexpr double kMaxFinerNetControlPoints = 8192.0;
 
 }  // namespace
@@ -38,9 +38,10 @@ void add_representation_bias(AdaptiveFitResult& fit, const nurbs::Surface& start
   if (fit.span_weight.empty() || !(fit.noise_sigma > options.noise_floor) || !(fit.lambda > 0.0)) return;
   const nurbs::Surface coarse = on_net_of(start, fit.surface);
   const double coarse_count = static_cast<double>(coarse.num_u()) * coarse.num_v();
-  // Halved in one direction or both, whichever comes nearest the factor without passing it by more than 1 %.
-  const nurbs::Surface fine = uniformly_refined(coarse, kFinerNetFactor * coarse_count,
-                                                std::min(1.01 * kFinerNetFactor * coarse_count, kMaxFinerNetControlPoints));
+  // The spans halved in the direction whose spans are longer: a factor just under 2, as a second halving would pass
+  // the cap.
+  const double cap = std::min(1.01 * kFinerNetFactor * coarse_count, kMaxFinerNetControlPoints);
+  const nurbs::Surface fine = uniformly_refined(coarse, kFinerNetFactor * coarse_count, cap);
   if (static_cast<double>(fine.num_u()) * fine.num_v() < 1.5 * coarse_count) return;
   const std::vector<double> cu = coarse.U().breakpoints(), cv = coarse.V().breakpoints();
   const std::vector<double> fu = fine.U().breakpoints(), fv = fine.V().breakpoints();
