@@ -270,6 +270,10 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     const bool balance = surface.spatial_penalty == fitting::AdaptiveFitOptions::SpatialPenalty::Balance;
     fitting::AdaptiveFitOptions first_fit = surface;
     first_fit.spatial_penalty = fitting::AdaptiveFitOptions::SpatialPenalty::Roughness;
+    // Its u is never used when a balanced refit follows (on noisy data off scan lines): no representation check.
+    if (balance && surface.fit.cross_validation == fitting::CrossValidation::LeaveOneOut) {
+      first_fit.representation_bias = false;
+    }
     auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at, bool is_first = false) {
       in_fit.resize(pts.size());
       for (std::size_t j = 0; j < pts.size(); ++j) in_fit[j] = weights[j] > 0.0;
@@ -314,7 +318,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
         // (The balance is not used on exact data nor along scan lines: fitting/adaptive.cpp.)
         const bool balance_next = attempt == 0 && balance && fit->noise_sigma > surface.noise_floor &&
                                   surface.fit.cross_validation == fitting::CrossValidation::LeaveOneOut;
-        if (balance && attempt == 0 && changed == 0 && !move_again) first_residuals = fit->residuals;
+        if (balance_next && changed == 0 && !move_again) first_residuals = fit->residuals;
         if (!move_again && !balance_next && (changed == 0 || !moves_fit(largest, pts.size(), *fit))) break;
       }
     }

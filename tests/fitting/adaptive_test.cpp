@@ -184,7 +184,7 @@ TEST(FitSurface, ItsVarianceFactorPredictsTheScatterOverNoiseSeeds) {
 // nominal's 5 × 5 spans every span ends consistent with the noise, but the residuals show a misfit thin over the
 // face (AdaptiveFitResult::thin_misfit_seen), so the fit is made again from the spans halved
 // (AdaptiveFitOptions::dense_start_points_per_control_point) and the one with the lower cross-validation score
-// taken. Measured: 420 control points, rms error 0.81 µm, ±2u covers 97.2 %, against 529, 0.63 µm and 99.2 %.
+// taken. Measured: 420 control points, rms error 0.81 µm, ±2u covers 97.3 %, against 529, 0.63 µm and 99.2 %.
 // With the balanced penalty (AdaptiveFitOptions::SpatialPenalty::Balance) the fit from the nominal's spans follows
 // it: 361 control points, 0.64 µm, 97.5 %. (Not caught: where the residuals show nothing, e.g. 0.2 mm high and
 // σ_r 25 mm, 64 control points, 0.60 µm and 83.1 %; tried on every face the second start costs BM_Compensate10k
