@@ -2,7 +2,7 @@
 //   probecomp_shape_suite [--sigma S] [--case NAME[,NAME…]] [--draw N [--first SEED]] [--no-reference]
 //                         [--plain-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D]
 //                         [--no-local-refinement] [--levels L] [--min-cover C] [--dense-start K]
-//                         [--balanced-penalty]
+//                         [--roughness-penalty]
 // Each case of simulation::shape_suite() (or N cases drawn at random from its families, seeds FIRST, FIRST+1, …)
 // is simulated, compensated by the CAD method and scored against the actual part: std, mean and largest error
 // (µm, ok rows), the rows flagged, ±2u coverage overall and in the worst of 6 × 6 regions, the fitted centre
@@ -20,7 +20,8 @@
 // fitting::AdaptiveFitOptions::local_refinement off (knot lines only, as before it); --levels L lets cells refine
 // locally to THB level L (AdaptiveFitOptions::local_refinement_levels), --min-cover C sets
 // AdaptiveFitOptions::local_refinement_min_cover, --dense-start K AdaptiveFitOptions::dense_start_points_per_control_point
-// (0: the fit from the start's knots only); --balanced-penalty sets AdaptiveFitOptions::spatial_penalty to Balance.
+// (0: the fit from the start's knots only); --roughness-penalty sets AdaptiveFitOptions::spatial_penalty to Roughness
+// (the compensation's default is Balance).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -103,8 +104,8 @@ int main(int argc, char** argv) {
       seeds = std::atoi(next().c_str());
     } else if (arg == "--no-local-refinement") {
       options.fit.surface.local_refinement = false;
-    } else if (arg == "--balanced-penalty") {
-      options.fit.surface.spatial_penalty = fitting::AdaptiveFitOptions::SpatialPenalty::Balance;
+    } else if (arg == "--roughness-penalty") {
+      options.fit.surface.spatial_penalty = fitting::AdaptiveFitOptions::SpatialPenalty::Roughness;
     } else if (arg == "--dense-start") {
       options.fit.surface.dense_start_points_per_control_point = std::atof(next().c_str());
     } else if (arg == "--min-cover") {
@@ -114,7 +115,7 @@ int main(int argc, char** argv) {
     } else if (arg == "--noise-draw") {
       noise_draw = std::strtoull(next().c_str(), nullptr, 10);
     } else {
-      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D] [--no-local-refinement] [--levels L] [--min-cover C] [--dense-start K] [--balanced-penalty]\n",
+      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D] [--no-local-refinement] [--levels L] [--min-cover C] [--dense-start K] [--roughness-penalty]\n",
                    argv[0]);
       return 2;
     }

@@ -15,6 +15,7 @@
 
 #include "probecomp/compensation/normal_support.hpp"
 #include "probecomp/compensation/outliers.hpp"
+#include "probecomp/fitting/noise_estimate.hpp"
 #include "probecomp/geometry/neighbours.hpp"
 #include "probecomp/geometry/parallel.hpp"
 #include "probecomp/geometry/statistics.hpp"
@@ -54,6 +55,24 @@ nurbs::Surface fit_start(const nurbs::Surface& offset_face, const geometry::Rigi
 // S29 49.4 (550), 6.6 (113), 2.35 (46), 2.45 (50). With noise it stays 1e-6: at 1e-3 S25 (σ = 3 µm) went
 // 0.76 -> 0.93 µm.
 constexpr double kNoiseFreeLinesMinSpanWeight = 1e-2;
+
+// Whether any of a face's centres may be a gross error: one standing out by more than the outlier test's bound
+// from what its neighbours predict for its distance from the face's fit start (the registered offset face), or one
+// without a neighbourhood to judge it by (fitting::LocalPredictionNoise, whose local quadratic follows the smooth
+// deformation). A crease the quadratic cannot follow counts too: the caller takes the safe course.
+bool may_hold_gross_errors(const nurbs::Surface& start, std::span<const Point3> pts,
+                           std::span<const fitting::SurfaceParameter> params, const OutlierTest& test) {
+  const fitting::LocalPredictionNoise local(pts, {}, pts.size());
+  if (local.tested() < pts.size()) return true;
+  std::vector<double> distance(pts.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size(), 1024), [&](const auto& range) {
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      const Point3 on = nurbs::evaluate(start, params[k].u, params[k].v);
+      distance[k] = (pts[k] - on).dot(nurbs::unit_normal(start, params[k].u, params[k].v).n);
+    }
+  });
+  return local.standing_out(distance, test.sigmas, test.min_residual) > 0;
+}
 
 // Fits made at most per face while peeling outliers off (each refit follows a change in the points left out).
 constexpr int kMaxOutlierFits = 4;
@@ -258,31 +277,36 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       surface.min_span_weight_noise_free = std::max(surface.min_span_weight_noise_free, kNoiseFreeLinesMinSpanWeight);
       surface.split_only_where_points_either_side = true;
     }
-    // The first fit, gross errors and all, keeps the roughness rule for its penalty's weights
-    // (AdaptiveFitOptions::SpatialPenalty): the balance of data and penalty lowers the penalty where the fitted shape
-    // holds energy, and a gross error's bend is such energy, so the fit followed the errors until the verdict no
-    // longer saw them all (the paper's 120 × 60 grid, 1 % of the points moved 0.1–5 mm, σ = 0.5 µm: contacts 9.0
-    // and 84.7 µm off and three good points flagged, against 1.4 and 1.2 µm with this first fit; keeping the
-    // roughness rule only around points that stand out from the spread around them: 922 µm at 145 u at σ = 1.5 µm,
-    // a moved point trusted). The refits, made without the points that verdict left out, use the balance; a face
-    // whose first fit leaves nothing out is refitted once with it, which doubles the fit's time (BM_Compensate10k
-    // 176 -> 322 ms).
-    const bool balance = surface.spatial_penalty == fitting::AdaptiveFitOptions::SpatialPenalty::Balance;
+    // With the balance of data and penalty (AdaptiveFitOptions::SpatialPenalty::Balance), a face that may hold gross
+    // errors is first fitted with the roughness rule: the balance lowers the penalty where the fitted shape holds
+    // energy, and a gross error's bend is such energy, so the fit followed the errors until the verdict no longer saw
+    // them all (the paper's 120 × 60 grid, 1 % of the points moved 0.1–5 mm, σ = 0.5 µm: contacts 9.0 and 84.7 µm
+    // off and three good points flagged, against 1.4 and 1.2 µm with this first fit; keeping the roughness rule only
+    // around points that stand out from the spread around them: 922 µm at 145 u at σ = 1.5 µm, a moved point
+    // trusted). The refits, made without the points that verdict left out, use the balance; such a face whose first
+    // fit leaves nothing out is refitted once with it.
+    const bool balance = surface.spatial_penalty == fitting::AdaptiveFitOptions::SpatialPenalty::Balance &&
+                         surface.fit.cross_validation == fitting::CrossValidation::LeaveOneOut;
     fitting::AdaptiveFitOptions first_fit = surface;
     first_fit.spatial_penalty = fitting::AdaptiveFitOptions::SpatialPenalty::Roughness;
     // Its u is never used when a balanced refit follows (on noisy data off scan lines): no representation check.
-    if (balance && surface.fit.cross_validation == fitting::CrossValidation::LeaveOneOut) {
-      first_fit.representation_bias = false;
-    }
+    if (balance) first_fit.representation_bias = false;
+    // Where no centre stands out from what its neighbours predict for it (may_hold_gross_errors), there is no gross
+    // error for the balance to follow, and the first fit is the balanced one: one fit of the face, not two
+    // (BM_Compensate10k, whose face is such: 1.7 times the roughness rule's time with two fits, 1.0 with one). Its
+    // verdict is made as any first fit's, and the refits without what it leaves out are balanced as above: no point
+    // stood out by the test's 5 σ before the fit, so what it leaves out lies at that edge (the noise's tail: a million
+    // points hold about one, which restarting with the roughness rule would have cost a million-point face a third
+    // fit: BM_Compensate1M20x20 161 s against 70 s).
+    const bool balanced_first = balance && !may_hold_gross_errors(start, pts, params, options.outliers);
     auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at, bool is_first = false) {
       in_fit.resize(pts.size());
       for (std::size_t j = 0; j < pts.size(); ++j) in_fit[j] = weights[j] > 0.0;
-      fit = fitting::fit_surface(from, pts, at, weights, is_first ? first_fit : surface);
+      fit = fitting::fit_surface(from, pts, at, weights, is_first && !balanced_first ? first_fit : surface);
       ++rep.fits;
       rep.rounds += fit->rounds;
     };
     std::vector<char> outlier(pts.size(), 0);
-    std::vector<double> first_residuals;  // with the balance: the first fit's, when it left no point out
     if (static_cast<double>(pts.size()) >= needed) {
       // Outliers are decided against the fit itself (compensation/outliers.hpp), left out, and the face refitted,
       // until the set left out no longer changes: a point left out is taken back when the fit made without it
@@ -316,9 +340,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
           moved_along_fit = true;
         }
         // (The balance is not used on exact data nor along scan lines: fitting/adaptive.cpp.)
-        const bool balance_next = attempt == 0 && balance && fit->noise_sigma > surface.noise_floor &&
-                                  surface.fit.cross_validation == fitting::CrossValidation::LeaveOneOut;
-        if (balance_next && changed == 0 && !move_again) first_residuals = fit->residuals;
+        const bool balance_next = attempt == 0 && balance && !balanced_first && fit->noise_sigma > surface.noise_floor;
         if (!move_again && !balance_next && (changed == 0 || !moves_fit(largest, pts.size(), *fit))) break;
       }
     }
@@ -337,17 +359,6 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       if (!check.angle.empty()) {
         ff.normal_angle.resize(members.size());
         for (std::size_t i = 0; i < members.size(); ++i) ff.normal_angle[i] = check.angle[position[i]];
-      }
-      // The balanced fit and the first, two fits of the same points whose penalties differ only in how they vary
-      // over the face, disagree by |r₁ − r| at a point, and which of them is right there is not known: the final
-      // fit's bias there is taken to be at least that. Where the balance kept the coarse knots and missed a broad
-      // bulge the first fit followed from a finer start, u held none of it (D207: worst region's ±2u coverage
-      // 43.4 %; with this 69.7 %. Over 94 faces with the balance: faces with a region under 88 %, 29 -> 27;
-      // faces whose overall coverage is above 99 %, 33 -> 37).
-      if (!first_residuals.empty() && std::all_of(in_fit.begin(), in_fit.end(), [](char c) { return c != 0; })) {
-        for (std::size_t j = 0; j < pts.size(); ++j) {
-          fit->misfit[j] = std::max(fit->misfit[j], std::abs(first_residuals[j] - fit->residuals[j]));
-        }
       }
       per_member(*fit, position);
       rep.fit_status = fit->status;

@@ -79,16 +79,17 @@ Prediction predict_centre(const Point3& centre, const std::array<Point3, LocalPr
 
 }  // namespace
 
-LocalPredictionNoise::LocalPredictionNoise(std::span<const Point3> points, std::span<const double> weights) {
+LocalPredictionNoise::LocalPredictionNoise(std::span<const Point3> points, std::span<const double> weights,
+                                           std::size_t max_points) {
   constexpr auto K = static_cast<std::size_t>(kNeighbours);
   auto used = [&](std::size_t k) { return weights.empty() || weights[k] > 0.0; };
-  // The points taken part: the used ones, every m-th of them over kMaxPoints.
+  // The points taken part: the used ones, every m-th of them over max_points.
   std::vector<std::uint32_t> taken;
   for (std::size_t k = 0; k < points.size(); ++k) {
     if (used(k)) taken.push_back(static_cast<std::uint32_t>(k));
   }
-  if (taken.size() > kMaxPoints) {
-    const std::size_t m = (taken.size() + kMaxPoints - 1) / kMaxPoints;
+  if (taken.size() > max_points) {
+    const std::size_t m = (taken.size() + max_points - 1) / max_points;
     std::size_t n = 0;
     for (std::size_t i = 0; i < taken.size(); i += m) taken[n++] = taken[i];
     taken.resize(n);
@@ -128,10 +129,8 @@ double LocalPredictionNoise::neighbour_correlation(std::span<const double> resid
   return own > 0.0 ? cross / (static_cast<double>(K) * own) : 0.0;
 }
 
-double LocalPredictionNoise::sigma(std::span<const double> residuals) const {
-  if (tested_.empty()) return std::numeric_limits<double>::infinity();
+std::vector<double> LocalPredictionNoise::prediction_errors(std::span<const double> residuals) const {
   constexpr auto K = static_cast<std::size_t>(kNeighbours);
-  // Each tested point's standardised prediction error.
   std::vector<double> e(tested_.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tested_.size(), 1024), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -140,6 +139,21 @@ double LocalPredictionNoise::sigma(std::span<const double> residuals) const {
       e[i] = std::abs(residuals[tested_[i]] - predicted) * static_cast<double>(scale_[i]);
     }
   });
+  return e;
+}
+
+std::size_t LocalPredictionNoise::standing_out(std::span<const double> residuals, double sigmas, double floor) const {
+  if (tested_.empty()) return 0;
+  const double bound = std::max(sigmas * sigma(residuals), floor);
+  const std::vector<double> e = prediction_errors(residuals);
+  return static_cast<std::size_t>(std::count_if(e.begin(), e.end(), [&](double x) { return !(x <= bound); }));
+}
+
+double LocalPredictionNoise::sigma(std::span<const double> residuals) const {
+  if (tested_.empty()) return std::numeric_limits<double>::infinity();
+  constexpr auto K = static_cast<std::size_t>(kNeighbours);
+  // Each tested point's standardised prediction error.
+  const std::vector<double> e = prediction_errors(residuals);
   std::vector<double> work = e;
   const double first = geometry::kMadToSigma * geometry::median_in_place(work);
   // A gross error spoils the prediction of every point that has it among its neighbours (3 % of such points spoil

@@ -44,11 +44,10 @@ struct AdaptiveFitOptions {
   // or from the local balance of data and penalty (restricted maximum likelihood's, for a penalty per neighbourhood
   // of spans; on scan lines and exact data the roughness rule is used whatever this says). The balance is more
   // accurate on the shape suite's grids and random points (63 faces at σ = 1.5–10 µm: std median 1.216 -> 1.057 µm,
-  // 42 better by 2 % or more and 5 worse; docs/accuracy.md). Given gross errors it lets the fit follow them, so
-  // compensation::fit_faces judges them on a fit with the roughness rule and uses the balance only for the refits
-  // made without them, and takes the two fits' disagreement into u (D207, a broad bulge the balanced fit misses:
-  // the worst region's ±2u coverage 43.4 % without it, 69.7 % with it, 93.2 % with the roughness rule). Not the
-  // default: it costs a second fit on every face (BM_Compensate10k 176 -> 322 ms).
+  // 42 better by 2 % or more and 5 worse; docs/accuracy.md). Given gross errors it lets the fit follow them:
+  // compensation::fit_faces, whose default it is, judges a face that may hold them on a fit with the roughness rule
+  // first and uses the balance for the refits made without them. Not the default here, where no verdict on gross
+  // errors follows.
   enum class SpatialPenalty { Roughness, Balance };
   SpatialPenalty spatial_penalty = SpatialPenalty::Roughness;
   // A span with fewer points is not split (its quarters would hold one or none). Four: a narrow dent in a grid of

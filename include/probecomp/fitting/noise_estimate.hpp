@@ -22,9 +22,13 @@ class LocalPredictionNoise {
  public:
   static constexpr int kNeighbours = 12;
 
+  // A noise estimate reads the same from a sample as from every point: this many at most.
+  static constexpr std::size_t kMaxPoints = 50'000;
+
   // Built once per face from the points' positions and weights (zero: left out, as tested point and as
-  // neighbour). Over kMaxPoints points, every m-th point and its neighbours among those (deterministic).
-  LocalPredictionNoise(std::span<const Point3> points, std::span<const double> weights);
+  // neighbour). Over max_points points, every m-th point and its neighbours among those (deterministic).
+  LocalPredictionNoise(std::span<const Point3> points, std::span<const double> weights,
+                       std::size_t max_points = kMaxPoints);
 
   // σ of the noise in `residuals` (one per point, in the order given at construction), mm; infinity where no
   // point has a usable neighbourhood.
@@ -35,9 +39,14 @@ class LocalPredictionNoise {
   [[nodiscard]] double neighbour_correlation(std::span<const double> residuals) const;
   // Points tested (those with a well-posed local quadratic).
   [[nodiscard]] std::size_t tested() const { return tested_.size(); }
+  // How many tested points' prediction errors stand out beyond `sigmas` times sigma(residuals) and beyond `floor`
+  // (mm): a gross error's mark whatever the smooth shape around it (a local quadratic follows that). A sharp feature
+  // the quadratic cannot follow (a crease between the neighbours) is counted too.
+  [[nodiscard]] std::size_t standing_out(std::span<const double> residuals, double sigmas, double floor) const;
 
  private:
-  static constexpr std::size_t kMaxPoints = 50'000;
+  // Each tested point's prediction error |e_k| / √(1 + a_k), in the order of tested_.
+  [[nodiscard]] std::vector<double> prediction_errors(std::span<const double> residuals) const;
   std::vector<std::uint32_t> tested_;     // the tested points
   std::vector<std::uint32_t> neighbour_;  // kNeighbours per tested point
   std::vector<float> weight_;             // the prediction's weight of each neighbour's residual
