@@ -56,24 +56,6 @@ nurbs::Surface fit_start(const nurbs::Surface& offset_face, const geometry::Rigi
 // 0.76 -> 0.93 µm.
 constexpr double kNoiseFreeLinesMinSpanWeight = 1e-2;
 
-// Whether any of a face's centres may be a gross error: one standing out by more than the outlier test's bound
-// from what its neighbours predict for its distance from the face's fit start (the registered offset face), or one
-// without a neighbourhood to judge it by (fitting::LocalPredictionNoise, whose local quadratic follows the smooth
-// deformation). A crease the quadratic cannot follow counts too: the caller takes the safe course.
-bool may_hold_gross_errors(const nurbs::Surface& start, std::span<const Point3> pts,
-                           std::span<const fitting::SurfaceParameter> params, const OutlierTest& test) {
-  const fitting::LocalPredictionNoise local(pts, {}, pts.size());
-  if (local.tested() < pts.size()) return true;
-  std::vector<double> distance(pts.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size(), 1024), [&](const auto& range) {
-    for (std::size_t k = range.begin(); k != range.end(); ++k) {
-      const Point3 on = nurbs::evaluate(start, params[k].u, params[k].v);
-      distance[k] = (pts[k] - on).dot(nurbs::unit_normal(start, params[k].u, params[k].v).n);
-    }
-  });
-  return local.standing_out(distance, test.sigmas, test.min_residual) > 0;
-}
-
 // Fits made at most per face while peeling outliers off (each refit follows a change in the points left out).
 constexpr int kMaxOutlierFits = 4;
 // Whether leaving points out of a fit (or taking them back in) is worth a refit: a point of residual e among n
@@ -291,14 +273,16 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     first_fit.spatial_penalty = fitting::AdaptiveFitOptions::SpatialPenalty::Roughness;
     // Its u is never used when a balanced refit follows (on noisy data off scan lines): no representation check.
     if (balance) first_fit.representation_bias = false;
-    // Where no centre stands out from what its neighbours predict for it (may_hold_gross_errors), there is no gross
-    // error for the balance to follow, and the first fit is the balanced one: one fit of the face, not two
-    // (BM_Compensate10k, whose face is such: 1.7 times the roughness rule's time with two fits, 1.0 with one). Its
-    // verdict is made as any first fit's, and the refits without what it leaves out are balanced as above: no point
-    // stood out by the test's 5 σ before the fit, so what it leaves out lies at that edge (the noise's tail: a million
-    // points hold about one, which restarting with the roughness rule would have cost a million-point face a third
-    // fit: BM_Compensate1M20x20 161 s against 70 s).
-    const bool balanced_first = balance && !may_hold_gross_errors(start, pts, params, options.outliers);
+    // Where no centre stands out from what its neighbours predict for its distance from the registered offset face
+    // (fitting::may_hold_gross_errors, with the outlier test's bound), there is no gross error for the balance to
+    // follow, and the first fit is the balanced one: one fit of the face, not two (BM_Compensate10k, whose face is
+    // such: 1.7 times the roughness rule's time with two fits, 1.0 with one). Its verdict is made as any first fit's,
+    // and the refits without what it leaves out are balanced as above: no point stood out by the test's 5 σ before
+    // the fit, so what it leaves out lies at that edge (the noise's tail: a million points hold about one, which
+    // restarting with the roughness rule would have cost a million-point face a third fit: BM_Compensate1M20x20
+    // 161 s against 70 s).
+    const bool balanced_first =
+        balance && !fitting::may_hold_gross_errors(start, pts, params, options.outliers.sigmas, options.outliers.min_residual);
     auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at, bool is_first = false) {
       in_fit.resize(pts.size());
       for (std::size_t j = 0; j < pts.size(); ++j) in_fit[j] = weights[j] > 0.0;

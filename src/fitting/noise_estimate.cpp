@@ -12,6 +12,8 @@
 #include "probecomp/geometry/neighbours.hpp"
 #include "probecomp/geometry/statistics.hpp"
 
+#include "nets.hpp"
+
 namespace probecomp::fitting {
 
 namespace {
@@ -144,24 +146,26 @@ std::vector<double> LocalPredictionNoise::prediction_errors(std::span<const doub
 
 std::size_t LocalPredictionNoise::standing_out(std::span<const double> residuals, double sigmas, double floor) const {
   if (tested_.empty()) return 0;
-  const double bound = std::max(sigmas * sigma(residuals), floor);
   const std::vector<double> e = prediction_errors(residuals);
+  const double bound = std::max(sigmas * sigma_of(e, residuals.size()), floor);
   return static_cast<std::size_t>(std::count_if(e.begin(), e.end(), [&](double x) { return !(x <= bound); }));
 }
 
 double LocalPredictionNoise::sigma(std::span<const double> residuals) const {
   if (tested_.empty()) return std::numeric_limits<double>::infinity();
+  return sigma_of(prediction_errors(residuals), residuals.size());
+}
+
+double LocalPredictionNoise::sigma_of(const std::vector<double>& e, std::size_t n_points) const {
   constexpr auto K = static_cast<std::size_t>(kNeighbours);
-  // Each tested point's standardised prediction error.
-  const std::vector<double> e = prediction_errors(residuals);
   std::vector<double> work = e;
   const double first = geometry::kMadToSigma * geometry::median_in_place(work);
   // A gross error spoils the prediction of every point that has it among its neighbours (3 % of such points spoil
   // a third of the predictions; the median then reads 1.6 σ): the points whose error stands out beyond
   // kGrossErrorSigmas and beyond each of their neighbours' are taken for gross errors, and the predictions
   // they enter are left out.
-  std::vector<char> gross(residuals.size(), 0);
-  std::vector<double> at_point(residuals.size(), 0.0);
+  std::vector<char> gross(n_points, 0);
+  std::vector<double> at_point(n_points, 0.0);
   for (std::size_t i = 0; i < tested_.size(); ++i) at_point[tested_[i]] = e[i];
   bool any = false;
   for (std::size_t i = 0; i < tested_.size(); ++i) {
@@ -179,6 +183,13 @@ double LocalPredictionNoise::sigma(std::span<const double> residuals) const {
     if (clean) work.push_back(e[i]);
   }
   return work.empty() ? first : geometry::kMadToSigma * geometry::median_in_place(work);
+}
+
+bool may_hold_gross_errors(const nurbs::Surface& s, std::span<const Point3> points,
+                           std::span<const SurfaceParameter> params, double sigmas, double floor) {
+  const LocalPredictionNoise local(points, {}, points.size());
+  if (local.tested() < points.size()) return true;
+  return local.standing_out(detail::along_normal(s, points, params, {}).residual, sigmas, floor) > 0;
 }
 
 }  // namespace probecomp::fitting

@@ -7,7 +7,9 @@
 #include <span>
 #include <vector>
 
+#include "probecomp/fitting/least_squares.hpp"
 #include "probecomp/geometry/types.hpp"
+#include "probecomp/nurbs/surface.hpp"
 
 namespace probecomp::fitting {
 
@@ -47,10 +49,19 @@ class LocalPredictionNoise {
  private:
   // Each tested point's prediction error |e_k| / √(1 + a_k), in the order of tested_.
   [[nodiscard]] std::vector<double> prediction_errors(std::span<const double> residuals) const;
+  // sigma() from those errors (n_points: the residuals' count); tested_ not empty.
+  [[nodiscard]] double sigma_of(const std::vector<double>& e, std::size_t n_points) const;
   std::vector<std::uint32_t> tested_;     // the tested points
   std::vector<std::uint32_t> neighbour_;  // kNeighbours per tested point
   std::vector<float> weight_;             // the prediction's weight of each neighbour's residual
   std::vector<float> scale_;              // 1 / √(1 + a_k)
 };
+
+// Whether any of the points may be a gross error, before any fit: one whose distance from `s` along its normal (at
+// the point's parameters) stands out from what its neighbours predict by more than `sigmas` times their noise and
+// more than `floor` (mm), or one without a neighbourhood to judge it by (every point is tested). The local quadratic
+// follows the smooth deformation from `s`; a feature it cannot follow (a dent's rim, a crease) counts too.
+[[nodiscard]] bool may_hold_gross_errors(const nurbs::Surface& s, std::span<const Point3> points,
+                                         std::span<const SurfaceParameter> params, double sigmas, double floor);
 
 }  // namespace probecomp::fitting
