@@ -133,9 +133,7 @@ LocalSpread::LocalSpread(const AdaptiveFitResult& fit)
     : fit_(fit), bu_(fit.surface.U().breakpoints()), bv_(fit.surface.V().breakpoints()) {}
 
 double LocalSpread::operator()(std::size_t k) const {
-  const std::size_t nsv = bv_.size() - 1;
-  const std::size_t s = static_cast<std::size_t>(span_of(bu_, fit_.params[k].u)) * nsv +
-                        static_cast<std::size_t>(span_of(bv_, fit_.params[k].v));
+  const std::size_t s = span_at(bu_, bv_, fit_.params[k].u, fit_.params[k].v);
   return s < fit_.span_spread.size() ? fit_.span_spread[s] : fit_.noise_sigma;
 }
 
@@ -334,8 +332,7 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
     std::vector<std::uint32_t> span(points.size());  // a face has far fewer than 2^32 spans
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096), [&](const auto& range) {
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
-        span[k] = static_cast<std::uint32_t>(static_cast<std::size_t>(span_of(bu, t[k].u)) * nsv +
-                                             static_cast<std::size_t>(span_of(bv, t[k].v)));
+        span[k] = static_cast<std::uint32_t>(span_at(bu, bv, t[k].u, t[k].v));
       }
     });
     const double clip2 = options.clip * options.clip;

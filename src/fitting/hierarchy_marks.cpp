@@ -41,7 +41,7 @@ int depth_at(const LevelFlags& domains, const std::vector<double>& bu, const std
   int depth = 0;
   for (std::size_t l = 0; l < domains.size(); ++l) {
     const std::vector<double> hu = halved(bu, static_cast<int>(l)), hv = halved(bv, static_cast<int>(l));
-    if (!domains[l][static_cast<std::size_t>(span_of(hu, u)) * cells(hv) + static_cast<std::size_t>(span_of(hv, v))]) break;
+    if (!domains[l][span_at(hu, hv, u, v)]) break;
     depth = static_cast<int>(l) + 1;
   }
   return depth;
@@ -54,7 +54,7 @@ void mark_at(LevelFlags& marks, int level, const std::vector<double>& bu, const 
     const int l = static_cast<int>(marks.size());
     marks.emplace_back(static_cast<std::size_t>(cells(halved(bu, l))) * static_cast<std::size_t>(cells(halved(bv, l))), 0);
   }
-  marks[static_cast<std::size_t>(level)][static_cast<std::size_t>(span_of(hu, u)) * cells(hv) + static_cast<std::size_t>(span_of(hv, v))] = 1;
+  marks[static_cast<std::size_t>(level)][span_at(hu, hv, u, v)] = 1;
 }
 
 LevelFlags carried(const LevelFlags& marks, const std::vector<double>& bu, const std::vector<double>& bv,

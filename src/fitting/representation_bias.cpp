@@ -66,8 +66,7 @@ void add_representation_bias(AdaptiveFitResult& fit, const nurbs::Surface& start
   std::vector<int> count(nsu * nsv, 0);
   std::vector<std::uint32_t> span(points.size());
   for (std::size_t k = 0; k < points.size(); ++k) {
-    span[k] = static_cast<std::uint32_t>(static_cast<std::size_t>(span_of(cu, fit.params[k].u)) * nsv +
-                                         static_cast<std::size_t>(span_of(cv, fit.params[k].v)));
+    span[k] = static_cast<std::uint32_t>(span_at(cu, cv, fit.params[k].u, fit.params[k].v));
     if (!weights.empty() && !(weights[k] > 0.0)) continue;
     const double d = fit.residuals[k] - r[k];
     excess[span[k]] += d * d - s2 * std::max(finer.variance_factor[k] - fit.variance_factor[k], 0.0);

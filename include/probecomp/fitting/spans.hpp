@@ -25,6 +25,13 @@ namespace probecomp::fitting {
   return std::clamp(s, 0, static_cast<int>(breaks.size()) - 2);
 }
 
+// The span, a · (V spans) + b, of parameter (u, v) on the grid of spans between the breakpoints bu, bv (u-major,
+// as every per-span vector of the fitters is).
+[[nodiscard]] inline std::size_t span_at(const std::vector<double>& bu, const std::vector<double>& bv, double u,
+                                         double v) {
+  return static_cast<std::size_t>(span_of(bu, u)) * (bv.size() - 1) + static_cast<std::size_t>(span_of(bv, v));
+}
+
 // The breakpoints with every span halved `times` times (the knot spans of a THB basis's level `times`).
 [[nodiscard]] inline std::vector<double> halved(std::vector<double> breaks, int times) {
   for (int l = 0; l < times; ++l) {
