@@ -197,9 +197,9 @@ int main(int argc, char** argv) {
       if (stops) {
         // Where each face's refinement stopped, and why: what a basis with local refinement could change.
         for (const compensation::FaceReport& f : s.cad.faces) {
-          std::printf("    face %d: %d points, %d control points (edf %.1f, log10 lambda %+.2f), %d rounds, %d fits: %s\n",
-                      f.face, f.points, f.control_points, f.effective_dof, f.log10_smoothing, f.rounds, f.fits,
-                      f.stop_reason.c_str());
+          std::printf("    face %d: %d points, %d control points (edf %.1f, log10 lambda %+.2f, noise %.2f um), %d rounds, %d fits: %s\n",
+                      f.face, f.points, f.control_points, f.effective_dof, f.log10_smoothing, f.noise_sigma * 1e3,
+                      f.rounds, f.fits, f.stop_reason.c_str());
         }
       }
       if (oracle && !s.cad.faces.empty() && s.cad.faces.front().fitted) {
@@ -234,6 +234,16 @@ int main(int argc, char** argv) {
           a2[g] += angle * angle;
           ++n[g];
           in[g] += std::abs(s.cad_error[k]) <= 2.0 * s.cad.points[k].uncertainty;
+        }
+        std::vector<double> us;
+        for (std::size_t k = 0; k < s.plan.size(); ++k) {
+          if (s.cad.points[k].status == compensation::PointStatus::Ok) us.push_back(s.cad.points[k].uncertainty * 1e3);
+        }
+        std::sort(us.begin(), us.end());
+        if (!us.empty()) {
+          auto q = [&](double p) { return us[std::min(us.size() - 1, static_cast<std::size_t>(p * us.size()))]; };
+          std::printf("    u (um) quantiles 10 %% %.2f, 50 %% %.2f, 90 %% %.2f, 99 %% %.2f, largest %.2f\n", q(0.1), q(0.5),
+                      q(0.9), q(0.99), us.back());
         }
         for (std::size_t g = 0; g < 36; ++g) {
           if (n[g] == 0) continue;
