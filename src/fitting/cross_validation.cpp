@@ -129,11 +129,13 @@ namespace {
 // cross-validation: Arlot and Celisse, "A survey of cross-validation procedures for model selection", 2010).
 template <int M>
 double leave_span_out_terms(const CvRows& rows, const std::vector<std::size_t>& starts, std::size_t first,
-                            std::size_t last, const std::vector<double>& D, const std::vector<double>& Z, int b) {
+                            std::size_t last, const std::vector<double>& D, const std::vector<double>& Z, int b,
+                            double* span_terms) {
   const std::size_t mm = static_cast<std::size_t>(rows.m);
   using Square = Eigen::Matrix<double, M, M>;
   double sum = 0.0;
   for (std::size_t s = first; s < last; ++s) {
+    const double before = sum;
     const std::size_t a = starts[s], e = starts[s + 1];
     // A THB row's own functions only: its padding repeats an unknown, which would make the block singular.
     const int m = rows.len[a];
@@ -163,6 +165,7 @@ double leave_span_out_terms(const CvRows& rows, const std::vector<std::size_t>& 
       const Eigen::RowVector3d r = (d.transpose() * R - rows.y[i]).transpose() + R.transpose() * Kg;
       sum += rows.w[i] * r.squaredNorm();
     }
+    if (span_terms != nullptr) span_terms[s] = sum - before;
   }
   return sum;
 }
@@ -175,17 +178,20 @@ double leave_span_out_terms(const CvRows& rows, const std::vector<std::size_t>& 
 // nothing but the smoothing holds the fit, the fit swings (shape suite, lines 4 mm apart, σ = 3 µm: contacts up to
 // 0.29 mm off). A span's points left out together must be predicted from other lines, as the fit between the lines
 // is.
-double leave_span_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b) {
+double leave_span_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b,
+                      std::vector<double>* span_terms) {
   const std::vector<std::size_t>& starts = rows.span_starts;
   const std::size_t spans = starts.size() - 1;
+  if (span_terms != nullptr) span_terms->assign(spans, 0.0);
+  double* terms = span_terms != nullptr ? span_terms->data() : nullptr;
   // Fixed groups of spans summed in order: the same sum for any thread count.
   constexpr std::size_t kSpansPerGroup = 32;
   const std::size_t groups = (spans + kSpansPerGroup - 1) / kSpansPerGroup;
   std::vector<double> part(groups, 0.0);
   tbb::parallel_for(std::size_t{0}, groups, [&](std::size_t grp) {
     const std::size_t first = grp * kSpansPerGroup, last = std::min(spans, (grp + 1) * kSpansPerGroup);
-    part[grp] = rows.m == 16 ? leave_span_out_terms<16>(rows, starts, first, last, D, Z, b)
-                             : leave_span_out_terms<Eigen::Dynamic>(rows, starts, first, last, D, Z, b);
+    part[grp] = rows.m == 16 ? leave_span_out_terms<16>(rows, starts, first, last, D, Z, b, terms)
+                             : leave_span_out_terms<Eigen::Dynamic>(rows, starts, first, last, D, Z, b, terms);
   });
   double total = 0.0;
   for (double x : part) total += x;
