@@ -9,7 +9,8 @@
 // surface's rms distance from the true centres (what `probecomp fit` writes), and the same std for the reference
 // smoother (tests/support/reference_smoother.hpp, a P-spline with GCV written apart from the product's fit) on the
 // same points with the same registration, and the ratio of the two. A summary gives the median and worst of each.
-// --sigma replaces every case's noise (mm). --stops prints where each face's refinement stopped and why; --oracle
+// --sigma replaces every case's noise (mm). --regions prints the quantiles of u and each of the 6 × 6 regions' rms
+// error, rms u and coverage. --stops prints where each face's refinement stopped and why, and its noise; --oracle
 // fits each case again with every fit's cross-validated λ moved by ±0.25, 0.5 and 1 decade, and prints the std at
 // each: whether cross-validation over- or under-smooths there (the suite knows the truth; the product does not).
 // --seeds N runs each case N times, the noise drawn again each time on the same points (ShapeCase::noise_draw),
