@@ -182,7 +182,9 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
         c.status = ff.trusted[i] ? PointStatus::Ok : PointStatus::Outlier;
         c.contact = contacts[b].contact;
         c.normal = contacts[b].normal;
-        c.uncertainty = std::hypot(ff.fit->noise_sigma * std::sqrt(ff.fit->variance_factor[i]), ff.fit->misfit[i]);
+        // (Along scan lines the bias is also read from the residuals along the line: compensation/scan_lines.hpp.)
+        const double bias = ff.line_bias.empty() ? ff.fit->misfit[i] : std::max(ff.fit->misfit[i], ff.line_bias[i]);
+        c.uncertainty = std::hypot(ff.fit->noise_sigma * std::sqrt(ff.fit->variance_factor[i]), bias);
         // An outlier's reading and the fit disagree by its residual, and which of them is right is not known (a
         // gross error, or shape the fit cannot follow): its u covers both. So does that of a point the last fit
         // left out but found within its bound (the refits ran out before taking it back): the fit there is a
@@ -191,6 +193,10 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
         // Next to points left out, the fit's normal may not be what the data show: the contact point is then
         // r(1 − cos θ) off along it (normal_support.hpp). Where θ could not be told, the worst case: r.
         if (!ff.normal_angle.empty()) c.uncertainty = std::hypot(c.uncertainty, normal_doubt(radii[members[i]], ff.normal_angle[i]));
+        // And across scan lines, how far it may be off where no data show it (compensation/scan_lines.hpp).
+        if (!ff.normal_unseen_angle.empty()) {
+          c.uncertainty = std::hypot(c.uncertainty, normal_doubt(radii[members[i]], ff.normal_unseen_angle[i]));
+        }
       }
     }
   }

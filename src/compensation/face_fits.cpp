@@ -25,6 +25,7 @@
 #include "contact_points.hpp"
 #include "element_faces.hpp"
 #include "input_checks.hpp"
+#include "scan_lines.hpp"
 #include "warnings.hpp"
 
 namespace probecomp::compensation {
@@ -340,6 +341,18 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       std::vector<double> last_weights(in_fit.begin(), in_fit.end());
       const NormalDisagreement check = normal_disagreement(fit->surface, pts, fit->params, last_weights, normal_check);
       ff.normal_checked_along_lines = check.along_lines;
+      if (check.along_lines) {
+        const detail::ScanLineDoubts doubts = detail::scan_line_doubts(
+            fit->surface, start, pts, fit->params, fit->residuals, last_weights, fit->noise_sigma,
+            normal_check.line_variance_ratio);
+        ff.line_bias.resize(members.size());
+        ff.normal_unseen_angle.resize(members.size());
+        ff.line_spacing = doubts.line_spacing;
+        for (std::size_t i = 0; i < members.size(); ++i) {
+          ff.line_bias[i] = doubts.bias[position[i]];
+          ff.normal_unseen_angle[i] = doubts.normal_angle[position[i]];
+        }
+      }
       if (!check.angle.empty()) {
         ff.normal_angle.resize(members.size());
         for (std::size_t i = 0; i < members.size(); ++i) ff.normal_angle[i] = check.angle[position[i]];

@@ -94,6 +94,30 @@ void normal_warnings(const FitResult& fits, const geometry::TipRadii& radii, std
                       "° from what the centres around them show (the fit swings across the gap they leave): " + rows +
                       "measure more points there (with the outliers' cause removed) to settle it");
     }
+    if (!ff.normal_unseen_angle.empty()) {
+      int unseen = 0;
+      double unseen_angle = 0.0, unseen_doubt = 0.0;
+      for (std::size_t i = 0; i < ff.members.size(); ++i) {
+        const std::size_t k = ff.members[i];
+        if (!points[k].computed()) continue;
+        const double doubt = normal_doubt(radii[k], ff.normal_unseen_angle[i]);
+        if (doubt > 0.5 * points[k].uncertainty && doubt > kNormalDoubtReported) {
+          ++unseen;
+          unseen_angle = std::max(unseen_angle, ff.normal_unseen_angle[i]);
+          unseen_doubt = std::max(unseen_doubt, doubt);
+        }
+      }
+      if (unseen > 0) {
+        char angle[32];
+        std::snprintf(angle, sizeof angle, "%.1f", unseen_angle * 180.0 / std::numbers::pi);
+        warnings.push_back(face + "its points lie along lines " + mm(ff.line_spacing) +
+                           " mm apart, and along them the shape turns by up to " + angle +
+                           "° within half that: across the lines, where nothing was measured, the normal may be as "
+                           "far off; " + std::to_string(unseen) + " row" + (unseen == 1 ? "'s u holds" : "s' u hold") +
+                           " the r(1 - cos θ) that makes, up to " + mm(unseen_doubt) +
+                           " mm; measure lines closer together there to settle it");
+      }
+    }
     if (unknown > 0) {
       warnings.push_back(face + std::to_string(unknown) + " row" + (unknown == 1 ? "" : "s") +
                          (lines ? " along its scan lines" : " next to the points left out of its fit") +

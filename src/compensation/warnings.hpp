@@ -30,7 +30,8 @@ void registration_warnings(const registration::RegistrationResult& r, std::vecto
 void unfitted_face_warnings(const std::vector<FaceReport>& faces, std::vector<std::string>& warnings);
 
 // Rows whose u is mostly the doubt about the fit's normal next to points left out or between scan lines
-// (compensation/normal_support.hpp): one warning per face, with the largest angle and what it makes.
+// (compensation/normal_support.hpp), or across scan lines where nothing was measured (compensation/scan_lines.hpp):
+// one warning per face and cause, with the largest angle and what it makes.
 void normal_warnings(const FitResult& fits, const geometry::TipRadii& radii, std::span<const CompensatedPoint> points,
                      std::vector<std::string>& warnings);
 

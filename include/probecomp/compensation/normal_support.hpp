@@ -17,7 +17,9 @@
 // Points that lie along lines (a scanning probe's, millimetres apart and dense along) are checked too, all of
 // them: across the lines only the penalty holds the fit, and on exact or nearly exact data it swings between them
 // (measured on the shape suite, lines 4 mm apart, σ = 0: normals tens of degrees off, contacts up to 0.56 mm off
-// with a u of 0.1 µm). Their local models take neighbours from enough lines to span a surface.
+// with a u of 0.1 µm). Their local models take neighbours from enough lines to span a surface: four for the cubic
+// (through three its t³ is fixed only by the lines' waviness), else the quadric through three. What neither shows,
+// the normal across the lines where nothing was measured, is compensation/scan_lines.hpp's.
 
 #include <cstddef>
 #include <optional>

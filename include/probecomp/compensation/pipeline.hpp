@@ -244,6 +244,10 @@ struct FaceFit {
   std::vector<double> normal_angle;
   // The points lie along lines (a scanning probe's), and each on a line was checked so (normal_support.hpp).
   bool normal_checked_along_lines = false;
+  // Then, per member (else empty; compensation/scan_lines.hpp): the fit's bias along its line, from the residuals
+  // around it, mm; and the angle its normal may be off across the lines, where no data show it, radians.
+  std::vector<double> line_bias, normal_unseen_angle;
+  double line_spacing = 0.0;  // then, the lines' spacing, mm
   std::optional<fitting::AdaptiveFitResult> fit;   // when the face was fitted
   std::optional<ElementFaceFit> element;           // when it was too sparse for that, but fitted as its element
   FaceReport report;

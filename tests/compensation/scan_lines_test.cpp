@@ -1,0 +1,108 @@
+// scan_line_doubts against closed forms: a fit bent along the lines by a known curvature (the angle its normal may
+// be off across them), residuals of a known mean on one line (the bias), and the lines' spacing.
+
+#include "compensation/scan_lines.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "probecomp/nurbs/constructors.hpp"
+
+namespace probecomp::compensation::detail {
+namespace {
+
+constexpr double kSide = 25.0;  // mm
+
+// Five lines 4 mm apart along x on the square [0, 25]² (parameters x/25, y/25), a point every 0.2 mm.
+struct PlaneLines {
+  std::vector<Point3> points;
+  std::vector<fitting::SurfaceParameter> params;
+  std::vector<int> line;
+  PlaneLines(const nurbs::Surface& s, double gap) {
+    for (int l = 0; l < 5; ++l) {
+      for (int i = 0; i <= 100; ++i) {
+        const double u = (2.0 + 0.2 * i) / kSide, v = (2.0 + gap * l) / kSide;
+        points.push_back(nurbs::evaluate(s, u, v));
+        params.push_back({u, v});
+        line.push_back(l);
+      }
+    }
+  }
+};
+
+// The bicubic plane z = 0 over the square, and the same net moved to z = c·x² (Bernstein coefficients of u² in
+// degree 3: 0, 0, 1/3, 1).
+nurbs::Surface flat() { return nurbs::make_plane_patch({0, 0, 0}, {kSide, 0, 0}, {0, kSide, 0}, 3, 3); }
+nurbs::Surface bent(double c) {
+  const nurbs::Surface s = flat();
+  std::vector<HomogeneousPoint> Pw = s.homogeneous();
+  constexpr double kBernsteinOfUSquared[4] = {0.0, 0.0, 1.0 / 3.0, 1.0};
+  for (int i = 0; i < s.num_u(); ++i) {
+    for (int j = 0; j < s.num_v(); ++j) Pw[static_cast<std::size_t>(i * s.num_v() + j)].z() = c * kSide * kSide * kBernsteinOfUSquared[i];
+  }
+  return nurbs::Surface(s.U(), s.V(), std::move(Pw));
+}
+
+TEST(ScanLineDoubts, TheNormalMayTurnAcrossTheLinesAsMuchAsTheDeformationTurnsAlongThemOverHalfTheirSpacing) {
+  // The fit z = c·x² against the flat start: the deformation's curvature along the lines (x) is 2c, measured along
+  // the fit's normal 2c·n_z; over half the 4 mm spacing its slope turns by that times 2 mm. (To first order in the
+  // fit's slope, here up to 0.09: per unit of arc length rather than of x, the curvature is a per cent lower.)
+  const double c = 2e-3;
+  const nurbs::Surface start = flat(), fit = bent(c);
+  const PlaneLines g(fit, 4.0);
+  const std::vector<double> residuals(g.points.size(), 0.0), weights(g.points.size(), 1.0);
+  const ScanLineDoubts d = scan_line_doubts(fit, start, g.points, g.params, residuals, weights, 4.5e-3, 1e-2);
+  EXPECT_NEAR(d.line_spacing, 4.0, 1e-6);
+  ASSERT_EQ(d.normal_angle.size(), g.points.size());
+  for (std::size_t k = 0; k < g.points.size(); ++k) {
+    const double x = g.points[k].x(), n_z = 1.0 / std::hypot(1.0, 2.0 * c * x);
+    const double expected = std::atan(2.0 * c * n_z * 2.0);
+    EXPECT_NEAR(d.normal_angle[k], expected, 1e-2 * expected) << k;
+    EXPECT_EQ(d.bias[k], 0.0) << k;
+  }
+  // The start itself: no deformation, nothing unseen.
+  const ScanLineDoubts none = scan_line_doubts(start, start, g.points, g.params, residuals, weights, 4.5e-3, 1e-2);
+  for (const double a : none.normal_angle) EXPECT_EQ(a, 0.0);
+}
+
+TEST(ScanLineDoubts, AResidualMeanAlongALineIsItsBiasLessTheMeansNoise) {
+  // Residuals of 6 µm on line 2, nothing elsewhere, σ = 4.5 µm: the mean of twelve residuals on that line is
+  // 6 µm, whose noise is σ²/12.
+  const nurbs::Surface s = flat();
+  const PlaneLines g(s, 4.0);
+  const double sigma = 4.5e-3, mean = 6e-3;
+  std::vector<double> residuals(g.points.size(), 0.0);
+  for (std::size_t k = 0; k < g.points.size(); ++k) residuals[k] = g.line[k] == 2 ? mean : 0.0;
+  std::vector<double> weights(g.points.size(), 1.0);
+  weights[5] = 0.0;  // a point left out gets the bias of the in-fit points around it
+  const ScanLineDoubts d = scan_line_doubts(s, s, g.points, g.params, residuals, weights, sigma, 1e-2);
+  for (std::size_t k = 0; k < g.points.size(); ++k) {
+    EXPECT_NEAR(d.bias[k], g.line[k] == 2 ? std::sqrt(mean * mean - sigma * sigma / 12.0) : 0.0, 1e-12) << k;
+  }
+  // A residual mean within its own noise is no bias.
+  for (double& r : residuals) r = r > 0.0 ? 1e-3 : 0.0;
+  for (const double b : scan_line_doubts(s, s, g.points, g.params, residuals, weights, sigma, 1e-2).bias) EXPECT_EQ(b, 0.0);
+}
+
+TEST(ScanLineDoubts, AGridIsNotLines) {
+  const nurbs::Surface start = flat(), fit = bent(2e-3);
+  std::vector<Point3> points;
+  std::vector<fitting::SurfaceParameter> params;
+  for (int i = 0; i <= 50; ++i) {
+    for (int j = 0; j <= 50; ++j) {
+      const double u = 0.1 + 0.8 * i / 50.0, v = 0.1 + 0.8 * j / 50.0;
+      points.push_back(nurbs::evaluate(fit, u, v));
+      params.push_back({u, v});
+    }
+  }
+  const std::vector<double> residuals(points.size(), 5e-3), weights(points.size(), 1.0);
+  const ScanLineDoubts d = scan_line_doubts(fit, start, points, params, residuals, weights, 4.5e-3, 1e-2);
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    EXPECT_EQ(d.bias[k], 0.0) << k;
+    EXPECT_EQ(d.normal_angle[k], 0.0) << k;
+  }
+}
+
+}  // namespace
+}  // namespace probecomp::compensation::detail
