@@ -52,6 +52,11 @@ TEST(ShapeSuite, ScanLinesWithoutNoiseStateTheirErrorInU) {
   EXPECT_LE(worst, 3.0);
   EXPECT_TRUE(std::any_of(r.cad.warnings.begin(), r.cad.warnings.end(),
                           [](const std::string& w) { return w.find("lie along lines") != std::string::npos; }));
+  // Its dent between the lines: the normal there is not measured, and the user is told (compensation/scan_lines.hpp).
+  EXPECT_TRUE(std::any_of(r.cad.warnings.begin(), r.cad.warnings.end(), [](const std::string& w) {
+    return w.find("across the lines, where nothing was measured") != std::string::npos;
+  }));
+  for (const std::string& w : r.cad.warnings) std::printf("warning: %s\n", w.c_str());
 }
 
 // The same lines at the suite's 7 000 points (S13; S29 across a 0.3 mm crease). Exact data leave every knot span the
