@@ -282,12 +282,19 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     // the fit, so what it leaves out lies at that edge (the noise's tail: a million points hold about one, which
     // restarting with the roughness rule would have cost a million-point face a third fit: BM_Compensate1M20x20
     // 161 s against 70 s).
-    const bool balanced_first =
-        balance && !fitting::may_hold_gross_errors(start, pts, params, options.outliers.sigmas, options.outliers.min_residual);
+    // The gate's LocalPredictionNoise is the one the first fit builds over the same points (every weight 1, and
+    // every point below its kMaxPoints): built once for both.
+    std::optional<fitting::LocalPredictionNoise> gate;
+    if (balance) gate.emplace(pts, std::span<const double>{}, pts.size());
+    const bool balanced_first = balance && !fitting::may_hold_gross_errors(*gate, start, pts, params, options.outliers.sigmas,
+                                                                           options.outliers.min_residual);
+    const bool gate_serves_first_fit = gate && pts.size() <= fitting::LocalPredictionNoise::kMaxPoints;
     auto refit = [&](const nurbs::Surface& from, std::span<const fitting::SurfaceParameter> at, bool is_first = false) {
       in_fit.resize(pts.size());
       for (std::size_t j = 0; j < pts.size(); ++j) in_fit[j] = weights[j] > 0.0;
-      fit = fitting::fit_surface(from, pts, at, weights, is_first && !balanced_first ? first_fit : surface);
+      // (The first fit's weights are all 1 and its points not yet moved: the gate's structure is its.)
+      fit = fitting::fit_surface(from, pts, at, weights, is_first && !balanced_first ? first_fit : surface,
+                                 is_first && gate_serves_first_fit ? &*gate : nullptr);
       ++rep.fits;
       rep.rounds += fit->rounds;
     };

@@ -122,10 +122,12 @@ constexpr double kMaxDenseStartControlPoints = 4096.0;
 // balance (as at 1 %); with the roughness rule, faces with a region whose ±2u coverage is under 88 %, 27 -> 26.
 constexpr double kCrossValidationTie = 0.02;
 
-// The adaptive fit from one start (see fit_surface); `used`: the points with weight > 0.
+// The adaptive fit from one start (see fit_surface); `used`: the points with weight > 0; `local_noise` built over
+// the points and weights.
 AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> points,
                               std::span<const SurfaceParameter> params, std::span<const double> weights,
-                              const AdaptiveFitOptions& options, std::size_t used);
+                              const AdaptiveFitOptions& options, std::size_t used,
+                              const LocalPredictionNoise& local_noise);
 
 }  // namespace
 
@@ -167,10 +169,13 @@ double robust_noise_sigma(std::span<const double> residuals, std::span<const dou
 
 AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> points,
                               std::span<const SurfaceParameter> params, std::span<const double> weights,
-                              const AdaptiveFitOptions& options) {
+                              const AdaptiveFitOptions& options, const LocalPredictionNoise* local_noise) {
   std::size_t used = 0;
   for (std::size_t k = 0; k < points.size(); ++k) used += weights.empty() || (k < weights.size() && weights[k] > 0.0);
-  AdaptiveFitResult from_start = refine_from(start, points, params, weights, options, used);
+  // (One structure for both starts below: it depends on the points and weights only.)
+  std::optional<LocalPredictionNoise> own;
+  if (local_noise == nullptr) local_noise = &own.emplace(points, weights);
+  AdaptiveFitResult from_start = refine_from(start, points, params, weights, options, used, *local_noise);
   // See AdaptiveFitOptions::representation_bias.
   auto with_representation_bias = [&](AdaptiveFitResult r, const Surface& from) {
     if (options.representation_bias && r.fitted()) detail::add_representation_bias(r, from, points, weights, options);
@@ -185,7 +190,7 @@ AdaptiveFitResult fit_surface(const Surface& start, std::span<const Point3> poin
   if (dense.num_u() * dense.num_v() == start.num_u() * start.num_v()) {
     return with_representation_bias(std::move(from_start), start);
   }
-  AdaptiveFitResult from_dense = refine_from(dense, points, params, weights, options, used);
+  AdaptiveFitResult from_dense = refine_from(dense, points, params, weights, options, used, *local_noise);
   // Two fits of the same points that cross-validation cannot tell apart (scores within kCrossValidationTie) are
   // both plausible, and which is right where they disagree is not known: the one kept is taken to be off by at
   // least |r − r_other| at each point. Where the balance (SpatialPenalty::Balance) kept the coarse knots and missed
@@ -211,14 +216,14 @@ namespace {
 
 AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> points,
                               std::span<const SurfaceParameter> params, std::span<const double> weights,
-                              const AdaptiveFitOptions& options, std::size_t used) {
+                              const AdaptiveFitOptions& options, std::size_t used,
+                              const LocalPredictionNoise& local_noise) {
   AdaptiveFitResult result{.status = AdaptiveFitResult::Status::NotDone, .surface = start};
   std::vector<SurfaceParameter> t(params.begin(), params.end());
   // The knots so far on the start's exact shape: what each round's fit penalises the displacement from (never
   // the last round's fit, which would make the final surface a cascade of fits whose variance the last one's
   // hat matrix does not describe).
   Surface target = start;
-  const LocalPredictionNoise local_noise(points, weights);
   // With local refinement (AdaptiveFitOptions::local_refinement): the cells of `target` (its knot spans, and at
   // level l those halved l times) marked for a finer level of a THB basis, and that basis; none marked: the tensor
   // fit on `target`.

@@ -187,7 +187,11 @@ double LocalPredictionNoise::sigma_of(const std::vector<double>& e, std::size_t 
 
 bool may_hold_gross_errors(const nurbs::Surface& s, std::span<const Point3> points,
                            std::span<const SurfaceParameter> params, double sigmas, double floor) {
-  const LocalPredictionNoise local(points, {}, points.size());
+  return may_hold_gross_errors(LocalPredictionNoise(points, {}, points.size()), s, points, params, sigmas, floor);
+}
+
+bool may_hold_gross_errors(const LocalPredictionNoise& local, const nurbs::Surface& s, std::span<const Point3> points,
+                           std::span<const SurfaceParameter> params, double sigmas, double floor) {
   if (local.tested() < points.size()) return true;
   return local.standing_out(detail::along_normal(s, points, params, {}).residual, sigmas, floor) > 0;
 }

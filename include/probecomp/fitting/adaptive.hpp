@@ -19,6 +19,8 @@
 
 namespace probecomp::fitting {
 
+class LocalPredictionNoise;  // fitting/noise_estimate.hpp
+
 struct AdaptiveFitOptions {
   PenalizedFitOptions fit;
   int max_rounds = 8;             // knot insertions at most
@@ -183,11 +185,14 @@ struct AdaptiveFitResult {
 };
 
 // `start` gives degrees, knots and weights, the first iterate and the regularisation's target (the nominal or
-// offset surface); `params` the points' starting parameters on it (e.g. from registration).
+// offset surface); `params` the points' starting parameters on it (e.g. from registration). `local_noise`: the
+// points' LocalPredictionNoise for these weights (LocalPredictionNoise(points, weights)) where the caller has it
+// (the gross-error gate builds it); else it is built here.
 [[nodiscard]] AdaptiveFitResult fit_surface(const nurbs::Surface& start, std::span<const Point3> points,
                                             std::span<const SurfaceParameter> params,
                                             std::span<const double> weights = {},
-                                            const AdaptiveFitOptions& options = {});
+                                            const AdaptiveFitOptions& options = {},
+                                            const LocalPredictionNoise* local_noise = nullptr);
 
 // Each point's foot point on `s`, by Newton from its parameters (the point's parameter is kept where Newton
 // does not converge). Parallel, deterministic.

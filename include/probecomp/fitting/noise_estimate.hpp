@@ -63,5 +63,10 @@ class LocalPredictionNoise {
 // follows the smooth deformation from `s`; a feature it cannot follow (a dent's rim, a crease) counts too.
 [[nodiscard]] bool may_hold_gross_errors(const nurbs::Surface& s, std::span<const Point3> points,
                                          std::span<const SurfaceParameter> params, double sigmas, double floor);
+// The same with the points' LocalPredictionNoise built by the caller over every point (no weights, max_points at
+// least their number), to be used again (fit_surface takes it).
+[[nodiscard]] bool may_hold_gross_errors(const LocalPredictionNoise& local, const nurbs::Surface& s,
+                                         std::span<const Point3> points, std::span<const SurfaceParameter> params,
+                                         double sigmas, double floor);
 
 }  // namespace probecomp::fitting
