@@ -33,7 +33,8 @@ struct ScanLineDoubts {
 // A point is on a line when its kNearLine nearest in-fit centres (weights > 0) spread across less than
 // `line_variance_ratio` times their spread along (as NormalCheck). There:
 //  - bias: the size of those neighbours' residuals' mean less that mean's noise, √max(0, m² − σ²/K) (σ the fit's
-//    noise), whose square is an unbiased estimate of the bias's;
+//    noise), whose square is an unbiased estimate of the bias's; its root mean square over the point's 64 nearest
+//    (the bias's local level: the estimate alone is too noisy to tell one point from the next);
 //  - normal_angle: |∂²δ/∂s²|·h/2, δ the fit's displacement from `start` along its normal, s the arc length along the
 //    line and h the lines' spacing.
 // `fit` and `start` share their parametrisation (the fit is start's net moved); `residuals` along the fit's normal.

@@ -14,18 +14,20 @@ namespace {
 
 constexpr double kSide = 25.0;  // mm
 
-// Five lines 4 mm apart along x on the square [0, 25]² (parameters x/25, y/25), a point every 0.2 mm.
+// `lines` lines `gap` mm apart along x on the square [0, 25]² (parameters x/25, y/25), a point every 0.2 mm (101
+// a line; `along` gives each point's number on its line).
 struct PlaneLines {
   std::vector<Point3> points;
   std::vector<fitting::SurfaceParameter> params;
-  std::vector<int> line;
-  PlaneLines(const nurbs::Surface& s, double gap) {
-    for (int l = 0; l < 5; ++l) {
+  std::vector<int> line, along;
+  PlaneLines(const nurbs::Surface& s, int lines, double gap) {
+    for (int l = 0; l < lines; ++l) {
       for (int i = 0; i <= 100; ++i) {
         const double u = (2.0 + 0.2 * i) / kSide, v = (2.0 + gap * l) / kSide;
         points.push_back(nurbs::evaluate(s, u, v));
         params.push_back({u, v});
         line.push_back(l);
+        along.push_back(i);
       }
     }
   }
@@ -50,7 +52,7 @@ TEST(ScanLineDoubts, TheNormalMayTurnAcrossTheLinesAsMuchAsTheDeformationTurnsAl
   // fit's slope, here up to 0.09: per unit of arc length rather than of x, the curvature is a per cent lower.)
   const double c = 2e-3;
   const nurbs::Surface start = flat(), fit = bent(c);
-  const PlaneLines g(fit, 4.0);
+  const PlaneLines g(fit, 5, 4.0);
   const std::vector<double> residuals(g.points.size(), 0.0), weights(g.points.size(), 1.0);
   const ScanLineDoubts d = scan_line_doubts(fit, start, g.points, g.params, residuals, weights, 4.5e-3, 1e-2);
   EXPECT_NEAR(d.line_spacing, 4.0, 1e-6);
@@ -67,18 +69,20 @@ TEST(ScanLineDoubts, TheNormalMayTurnAcrossTheLinesAsMuchAsTheDeformationTurnsAl
 }
 
 TEST(ScanLineDoubts, AResidualMeanAlongALineIsItsBiasLessTheMeansNoise) {
-  // Residuals of 6 µm on line 2, nothing elsewhere, σ = 4.5 µm: the mean of twelve residuals on that line is
-  // 6 µm, whose noise is σ²/12.
+  // Three lines 8 mm apart; residuals of 6 µm on the middle one, nothing elsewhere, σ = 4.5 µm: the mean of twelve
+  // residuals on that line is 6 µm, whose noise is σ²/12, and so is the level of those estimates over a point's 64
+  // nearest, all on its own line (12.8 mm of it) from the 25th point of a line to the 75th.
   const nurbs::Surface s = flat();
-  const PlaneLines g(s, 4.0);
+  const PlaneLines g(s, 3, 8.0);
   const double sigma = 4.5e-3, mean = 6e-3;
   std::vector<double> residuals(g.points.size(), 0.0);
-  for (std::size_t k = 0; k < g.points.size(); ++k) residuals[k] = g.line[k] == 2 ? mean : 0.0;
+  for (std::size_t k = 0; k < g.points.size(); ++k) residuals[k] = g.line[k] == 1 ? mean : 0.0;
   std::vector<double> weights(g.points.size(), 1.0);
-  weights[5] = 0.0;  // a point left out gets the bias of the in-fit points around it
+  weights[101 + 50] = 0.0;  // a point left out gets the bias of the in-fit points around it
   const ScanLineDoubts d = scan_line_doubts(s, s, g.points, g.params, residuals, weights, sigma, 1e-2);
   for (std::size_t k = 0; k < g.points.size(); ++k) {
-    EXPECT_NEAR(d.bias[k], g.line[k] == 2 ? std::sqrt(mean * mean - sigma * sigma / 12.0) : 0.0, 1e-12) << k;
+    if (g.along[k] < 25 || g.along[k] > 75) continue;
+    EXPECT_NEAR(d.bias[k], g.line[k] == 1 ? std::sqrt(mean * mean - sigma * sigma / 12.0) : 0.0, 1e-12) << k;
   }
   // A residual mean within its own noise is no bias.
   for (double& r : residuals) r = r > 0.0 ? 1e-3 : 0.0;

@@ -219,8 +219,8 @@ TEST(ShapeSuite, ScanLinesAtThreeMicrometresAreFollowed) {
 // smoothest λ within one standard error of the best score: 1.72, 1.48, 1.71, 1.75, 1.50, 2.02 µm, largest 5.7–8.1 µm.
 // And u states that error, neither less nor many times more: a degenerate local cubic in the normal check had held
 // it at a mean of 31 µm here (±2u covering 96 %); with the check sound, the bias along the lines and the normal across
-// them that no data show (compensation/scan_lines.hpp), ±2u covers 91.0–94.9 % over draws 0–7 at a mean u about the
-// error's std.
+// them that no data show (compensation/scan_lines.hpp), ±2u covers 93.6–95.8 % over draws 0–5 at a mean u of
+// 1.54–1.84 µm, about the error's std.
 TEST(ShapeSuite, ScanLinesAreFollowedOnEveryDrawOfTheNoise) {
   const simulation::ShapeCase drawn = simulation::draw_shape_case(500, 0.0045);
   ASSERT_EQ(drawn.sampling, simulation::Sampling::ScanLines);
