@@ -63,29 +63,46 @@ void unfitted_face_warnings(const std::vector<FaceReport>& faces, std::vector<st
 
 void normal_warnings(const FitResult& fits, const geometry::TipRadii& radii, std::span<const CompensatedPoint> points,
                      std::vector<std::string>& warnings) {
-  for (const FaceFit& ff : fits.faces) {
-    if (!ff.report.fitted || ff.normal_angle.empty()) continue;
+  // Per angle of a face's rows: those that could not be told, and those whose r(1 − cos θ) is most of their u
+  // (their count, largest angle and largest doubt).
+  struct Tally {
     int doubtful = 0, unknown = 0;
-    double largest_angle = 0.0, largest_doubt = 0.0;
+    double angle = 0.0, doubt = 0.0;
+  };
+  auto tally = [&](const FaceFit& ff, const std::vector<double>& angle) {
+    Tally t;
     for (std::size_t i = 0; i < ff.members.size(); ++i) {
       const std::size_t k = ff.members[i];
       if (!points[k].computed()) continue;
-      const double theta = ff.normal_angle[i], doubt = normal_doubt(radii[k], theta);
+      const double theta = angle[i], doubt = normal_doubt(radii[k], theta);
       if (std::isnan(theta)) {
-        ++unknown;
+        ++t.unknown;
       } else if (doubt > 0.5 * points[k].uncertainty && doubt > kNormalDoubtReported) {
-        ++doubtful;
-        largest_angle = std::max(largest_angle, theta);
-        largest_doubt = std::max(largest_doubt, doubt);
+        ++t.doubtful;
+        t.angle = std::max(t.angle, theta);
+        t.doubt = std::max(t.doubt, doubt);
       }
     }
+    return t;
+  };
+  // "… 5.2°…", and "N rows' u hold the r(1 - cos θ) that makes, up to D mm; ".
+  auto degrees = [](double radians) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f", radians * 180.0 / std::numbers::pi);
+    return std::string(text);
+  };
+  auto rows_holding = [](const Tally& t) {
+    return std::to_string(t.doubtful) + " row" + (t.doubtful == 1 ? "'s u holds" : "s' u hold") +
+           " the r(1 - cos θ) that makes, up to " + mm(t.doubt) + " mm; ";
+  };
+  for (const FaceFit& ff : fits.faces) {
+    if (!ff.report.fitted || ff.normal_angle.empty()) continue;
+    const Tally checked = tally(ff, ff.normal_angle);
+    const int unknown = checked.unknown;
     const std::string face = "face " + std::to_string(ff.report.face) + ": ";
     const bool lines = ff.normal_checked_along_lines;
-    if (doubtful > 0) {
-      char angle[32];
-      std::snprintf(angle, sizeof angle, "%.1f", largest_angle * 180.0 / std::numbers::pi);
-      const std::string rows = std::to_string(doubtful) + " row" + (doubtful == 1 ? "'s u holds" : "s' u hold") +
-                               " the r(1 - cos θ) that makes, up to " + mm(largest_doubt) + " mm; ";
+    if (checked.doubtful > 0) {
+      const std::string angle = degrees(checked.angle), rows = rows_holding(checked);
       warnings.push_back(
           lines ? face + "its points lie along lines, and between them the fitted normal is up to " + angle +
                       "° from what the neighbouring lines show (only the smoothing holds the fit across them): " + rows +
@@ -95,27 +112,12 @@ void normal_warnings(const FitResult& fits, const geometry::TipRadii& radii, std
                       "measure more points there (with the outliers' cause removed) to settle it");
     }
     if (!ff.normal_unseen_angle.empty()) {
-      int unseen = 0;
-      double unseen_angle = 0.0, unseen_doubt = 0.0;
-      for (std::size_t i = 0; i < ff.members.size(); ++i) {
-        const std::size_t k = ff.members[i];
-        if (!points[k].computed()) continue;
-        const double doubt = normal_doubt(radii[k], ff.normal_unseen_angle[i]);
-        if (doubt > 0.5 * points[k].uncertainty && doubt > kNormalDoubtReported) {
-          ++unseen;
-          unseen_angle = std::max(unseen_angle, ff.normal_unseen_angle[i]);
-          unseen_doubt = std::max(unseen_doubt, doubt);
-        }
-      }
-      if (unseen > 0) {
-        char angle[32];
-        std::snprintf(angle, sizeof angle, "%.1f", unseen_angle * 180.0 / std::numbers::pi);
+      const Tally unseen = tally(ff, ff.normal_unseen_angle);
+      if (unseen.doubtful > 0) {
         warnings.push_back(face + "its points lie along lines " + mm(ff.line_spacing) +
-                           " mm apart, and along them the shape turns by up to " + angle +
+                           " mm apart, and along them the shape turns by up to " + degrees(unseen.angle) +
                            "° within half that: across the lines, where nothing was measured, the normal may be as "
-                           "far off; " + std::to_string(unseen) + " row" + (unseen == 1 ? "'s u holds" : "s' u hold") +
-                           " the r(1 - cos θ) that makes, up to " + mm(unseen_doubt) +
-                           " mm; measure lines closer together there to settle it");
+                           "far off; " + rows_holding(unseen) + "measure lines closer together there to settle it");
       }
     }
     if (unknown > 0) {
