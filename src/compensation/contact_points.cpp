@@ -6,9 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "probecomp/compensation/contact.hpp"
@@ -17,6 +20,7 @@
 #include "probecomp/registration/constraints.hpp"
 
 #include "element_faces.hpp"
+#include "warnings.hpp"
 
 namespace probecomp::compensation {
 
@@ -58,11 +62,62 @@ double signed_distance(const cad::Face& face, const Point3& x, const nurbs::Clos
   return side < 0.0 ? -foot.distance : foot.distance;
 }
 
+// A correspondence as the hint of a search on the nominal model (which shares the offset model's faces and
+// parametrisation).
+cad::ModelPoint match_as_hint(const registration::PointMatch& m) {
+  cad::ModelPoint hint;
+  hint.status = m.status;
+  hint.face = m.face;
+  hint.u = m.u;
+  hint.v = m.v;
+  return hint;
+}
+
+// A fitted row whose contact normal is turned more than this (degrees) from the nominal part's normal at its
+// correspondence: no deformation of a part measured against its CAD model tilts its surface that far (the shape
+// suite's steepest dents: 26°), so the fit has followed something else there. On surf128's narrow end, where the
+// face's radius offset folds over and is millimetres off, the fit turned inside out: contacts 2 mm off at a u of
+// 34–90 µm. Such a row's u holds the distance to the contact the nominal part gives (offset towards its point
+// nearest the centre), which of the two is right not being known; turned past 90°, the fit is inside out there
+// and the row is an outlier.
+constexpr double kTurnedDegrees = 45.0;
+
+// One warning per face with turned rows: how many, the largest turn and disagreement, and the outliers.
+void turned_normal_warnings(const cad::Model& work, std::span<const CompensatedPoint> out,
+                            std::span<const registration::PointMatch> matches, std::span<const double> turned,
+                            std::span<const double> disagreement, std::vector<std::string>& warnings) {
+  struct Tally {
+    int rows = 0, inside_out = 0;
+    double angle = 0.0, distance = 0.0;
+  };
+  std::map<int, Tally> by_face;
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    if (!(turned[k] > 0.0)) continue;
+    Tally& t = by_face[work.faces[static_cast<std::size_t>(matches[k].face)].index];
+    ++t.rows;
+    t.inside_out += turned[k] > std::numbers::pi / 2.0;
+    t.angle = std::max(t.angle, turned[k]);
+    t.distance = std::max(t.distance, disagreement[k]);
+  }
+  for (const auto& [face, t] : by_face) {
+    char angle[32];
+    std::snprintf(angle, sizeof angle, "%.0f", t.angle * 180.0 / std::numbers::pi);
+    warnings.push_back("face " + std::to_string(face) + ": at " + std::to_string(t.rows) + " row" +
+                       (t.rows == 1 ? "" : "s") + " the fitted normal is turned up to " + angle +
+                       "° from the nominal part's, more than a deformation does (the fit followed something else: "
+                       "where the face bends tighter than the tip, its radius offset folds): their u holds the "
+                       "distance to the contact the nominal part gives, up to " + detail::mm(t.distance) + " mm" +
+                       (t.inside_out > 0 ? "; the " + std::to_string(t.inside_out) +
+                                               " turned past 90° (the fit inside out) are outliers"
+                                         : ""));
+  }
+}
+
 }  // namespace
 
 std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, std::span<const Point3> raw,
                                                 const registration::RegistrationResult& registration,
-                                                const FitResult& fits) {
+                                                const FitResult& fits, std::vector<std::string>* warnings) {
   const cad::Model& work = *prepared.nominal;
   const geometry::TipRadii& radii = prepared.radii;
   const geometry::RigidTransform& T = registration.transform;
@@ -96,13 +151,8 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
   tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
     if (!unfitted[k] || !raw[k].allFinite()) return;
     const registration::PointMatch& m = registration.matches[k];
-    cad::ModelPoint hint;
-    hint.status = m.status;
-    hint.face = m.face;
-    hint.u = m.u;
-    hint.v = m.v;
     const Point3 x = to_cad * raw[k];
-    const cad::ModelPoint foot = prepared.nominal_locator->closest_point(x, hint);
+    const cad::ModelPoint foot = prepared.nominal_locator->closest_point(x, match_as_hint(m));
     CompensatedPoint& c = out[k];
     if (!foot.ok() || !((x - foot.point).norm() > 0.0)) {
       c.status = PointStatus::Failed;
@@ -133,7 +183,10 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
     c.face = work.faces[static_cast<std::size_t>(foot.face)].index;
     c.normal = T.linear() * towards;
     const double r = radii[k];
-    c.contact = raw[k] - r * c.normal;
+    // The tip touched the part where it is nearest its centre: the contact lies towards that point, from a centre
+    // inside the material too (a face whose material side is wrong; surf128's face 2, whose contacts were put 2r
+    // away, on the far side of the centre), as its deviation says.
+    c.contact = raw[k] - r * (T.linear() * (x - foot.point).normalized());
     c.deviation = foot.distance - (foot.distance < 0.0 ? -r : r);
     c.uncertainty = registration.scale;
     // A tip past a fitted face's edge touched the part's rim, which the part's deformation moved with the face: its
@@ -202,13 +255,29 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
   }
 
   // Deviations of the fitted points: Newton from the correspondence's (u, v) (nominal and offset faces share their
-  // parametrisation), with the face's global search where Newton fails.
+  // parametrisation), with the face's global search where Newton fails. And whether the fit's normal is turned
+  // from the nominal part's beyond what a deformation does (kTurnedDegrees).
   std::vector<char> retry(raw.size(), 0);
+  std::vector<double> turned(raw.size(), 0.0), disagreement(raw.size(), 0.0);
+  const double turned_cos = std::cos(kTurnedDegrees * std::numbers::pi / 180.0);
   tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t k) {
     CompensatedPoint& c = out[k];
     if (!c.computed() || unfitted[k]) return;
     const registration::PointMatch& m = registration.matches[k];
     const cad::Face& face = work.faces[static_cast<std::size_t>(m.face)];
+    const double cos_turn = c.normal.dot(T.linear() * prepared.nominal_locator->outward_normal(m.face, m.u, m.v));
+    if (cos_turn < turned_cos) {
+      turned[k] = std::acos(std::max(cos_turn, -1.0));
+      disagreement[k] = 2.0 * radii[k];  // where the nominal part gives no contact either
+      const Point3 x = to_cad * raw[k];
+      const cad::ModelPoint near = prepared.nominal_locator->closest_point(x, match_as_hint(m));
+      if (near.ok() && (x - near.point).norm() > 0.0) {
+        const Vector3 towards = (near.distance < 0.0 ? -1.0 : 1.0) * (x - near.point).normalized();
+        disagreement[k] = (c.contact - (raw[k] - radii[k] * (T.linear() * towards))).norm();
+      }
+      c.uncertainty = std::hypot(c.uncertainty, disagreement[k]);
+      if (cos_turn < 0.0) c.status = PointStatus::Outlier;
+    }
     const Point3 x = to_cad * c.contact;
     const nurbs::ClosestPointResult foot = nurbs::refine_closest_point(face.surface, x, m.u, m.v);
     if (foot.ok()) {
@@ -231,6 +300,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
       c.uncertainty = std::sqrt(c.uncertainty * c.uncertainty + std::max(reg, 0.0));
     }
   });
+  if (warnings != nullptr) turned_normal_warnings(work, out, registration.matches, turned, disagreement, *warnings);
   std::map<int, nurbs::ClosestPointSolver> solvers;  // built for the faces that need one
   for (std::size_t k = 0; k < raw.size(); ++k) {
     if (!retry[k]) continue;

@@ -403,7 +403,7 @@ CompensationResult compensate_with_radii(const cad::Model& model, std::span<cons
   out.seconds.registration += clock.restart();
 
   step("compensation", 0.83);
-  out.points = compensate_points(prepared, raw, out.registration, fits);
+  out.points = compensate_points(prepared, raw, out.registration, fits, &out.warnings);
   add_radius_uncertainty(radius_u, out.points);
   out.seconds.compensation = clock.restart();
   // Every computed point by its face (edge points are not members of their face's fit, but are its points).

@@ -285,11 +285,13 @@ using StepProgress = std::function<void(double fraction)>;
 
 // Each point smoothed onto its face's fit and moved by r along the fitted normal into the material (or along the
 // registered nominal normal where the face was not fitted, or towards the edge for edge points), and its signed
-// deviation from the registered nominal. One result per input point, in order.
+// deviation from the registered nominal. One result per input point, in order. `warnings`, when given, receives
+// what the rows' statuses and u alone do not say (fitted normals turned far from the nominal part's).
 [[nodiscard]] std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared,
                                                               std::span<const Point3> raw_centres,
                                                               const registration::RegistrationResult& registration,
-                                                              const FitResult& fits);
+                                                              const FitResult& fits,
+                                                              std::vector<std::string>* warnings = nullptr);
 
 // --- the whole method ---
 
