@@ -27,6 +27,9 @@ if [ "${1:-}" = "--sanitize" ]; then
     Pipeline.AFewGrossOutliersAreLeftOutWithoutRegisteringAgain         #   (the same code, and the registration made again)
     Pipeline.UnfollowedShapeAtLowNoiseIsNotPeeledOff                    # Pipeline.NoiseFreeDataAreCompensated...
     FitSurface.DataOnHalfThePatchWithTheDentFitThatHalf                 # FitSurface.ADentTheNominalKnotsCannotFollow...
+    FitSurface.TheBalancedPenaltyFollowsANarrowDentWithoutRoughnessElsewhere  # FitSurface.ABroadMisfitTheSpan... (the
+                                                                        #   balanced penalty), and every Pipeline test
+                                                                        #   (it is the compensation's default)
     CrossValidation.OnScanLinesLeavingSpansOutKeepsTheNormalsBetweenTheLines  # the other CrossValidation tests
     Pipeline.FreeformCaseWithAnotherNoiseDrawMeetsTheBars               # Pipeline.FreeformCaseOnTheGridMeetsTheBars
     FreeformStudy.UncertaintyCoversTheTrueErrorOnThePanelAndInEachRegion_SteepDentLowNoise  # ..._RandomPointsLowNoise

@@ -632,8 +632,9 @@ TEST(Pipeline, TheBalancedFitIsMadeAloneWhereNoGrossErrorCanBe) {
     bool contaminated;
     int fits_at_least, fits_at_most;
   };
-  for (const Run& run : {Run{&random, 0.0045, false, 1, 1}, Run{&random, 0.0045, true, 2, 5},
-                         Run{&grid, 0.0045, false, 1, 1}, Run{&grid, 0.0015, false, 2, 2}}) {
+  // (The contaminated run first: the sanitizer build runs it alone, through both kinds of fit.)
+  for (const Run& run : test::cases<Run>({Run{&random, 0.0045, true, 2, 5}, Run{&random, 0.0045, false, 1, 1},
+                                          Run{&grid, 0.0045, false, 1, 1}, Run{&grid, 0.0015, false, 2, 2}})) {
     SCOPED_TRACE(::testing::Message() << run.panel->plan.size() << " points, sigma " << run.sigma
                                       << (run.contaminated ? ", 1 % moved" : ""));
     std::vector<Point3> points = run.panel->centres(run.sigma, 1);
