@@ -30,6 +30,7 @@ namespace {
 using detail::check_model_and_radii;
 using detail::check_point_spread;
 using detail::check_points_near;
+using detail::folded_offset_warnings;
 using detail::normal_warnings;
 using detail::registration_warnings;
 using detail::tip_radii;
@@ -440,6 +441,7 @@ CompensationResult compensate_with_radii(const cad::Model& model, std::span<cons
   out.warnings.insert(out.warnings.begin(), model.read_warnings.begin(), model.read_warnings.end());
   registration_warnings(out.registration, out.warnings);
   unfitted_face_warnings(out.faces, out.warnings);
+  folded_offset_warnings(prepared, out.faces, out.warnings);
   int repeated = 0;
   for (const FaceReport& rep : out.faces) repeated += rep.repeated;
   if (repeated > 0) {

@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <numbers>
 #include <string_view>
+
+#include "probecomp/cad/offset_model.hpp"
 
 #include "contact_points.hpp"
 
@@ -59,6 +62,26 @@ void unfitted_face_warnings(const std::vector<FaceReport>& faces, std::vector<st
   }
   if (unfitted.size() > kListedFaces) w += "; ... (every face in the JSON statistics)";
   warnings.push_back(w);
+}
+
+void folded_offset_warnings(const PreparedModel& prepared, const std::vector<FaceReport>& faces,
+                            std::vector<std::string>& warnings) {
+  std::map<int, std::size_t> position;  // cad::Face::index → position in the model
+  for (std::size_t f = 0; f < prepared.nominal->faces.size(); ++f) position[prepared.nominal->faces[f].index] = f;
+  for (const FaceReport& rep : faces) {
+    if (!rep.fitted) continue;
+    const auto at = position.find(rep.face);
+    if (at == position.end()) continue;
+    const fitting::OffsetResult& o = prepared.offset->faces[at->second];
+    if (o.status != fitting::OffsetResult::Status::FoldsOver) continue;
+    char where[64];
+    std::snprintf(where, sizeof where, "u %.4g, v %.4g", o.at_u, o.at_v);
+    warnings.push_back("face " + std::to_string(rep.face) + " bends tighter than the tip (a radius of " +
+                       mm(o.min_radius_towards_offset) + " mm at " + where +
+                       "): its radius offset folds over there and is up to " + mm(o.deviation) +
+                       " mm off, and the registration and the fit start from it; rows whose fitted normal it turned "
+                       "say so");
+  }
 }
 
 void normal_warnings(const FitResult& fits, const geometry::TipRadii& radii, std::span<const CompensatedPoint> points,

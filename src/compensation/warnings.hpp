@@ -29,6 +29,12 @@ void registration_warnings(const registration::RegistrationResult& r, std::vecto
 // with the most points first, at most kListedFaces of them by name.
 void unfitted_face_warnings(const std::vector<FaceReport>& faces, std::vector<std::string>& warnings);
 
+// Fitted faces that bend tighter than the tip somewhere: their radius offset folds over there and is left as its first
+// fit, which can be millimetres off (fitting/offset.hpp, FoldsOver); the registration and the fit start from it. One
+// warning per face, with the tightest radius, where, and how far the offset is off.
+void folded_offset_warnings(const PreparedModel& prepared, const std::vector<FaceReport>& faces,
+                            std::vector<std::string>& warnings);
+
 // Rows whose u is mostly the doubt about the fit's normal next to points left out or between scan lines
 // (compensation/normal_support.hpp), or across scan lines where nothing was measured (compensation/scan_lines.hpp):
 // one warning per face and cause, with the largest angle and what it makes.

@@ -184,6 +184,8 @@ if [ "$LIGHT" != light ]; then
   check "within_u '$W/s128' 5" "surf128 without i,j,k: every ok and outlier row within 5 u of the truth"
   check "grep -q 'warning: face 0: at [0-9]* rows the fitted normal is turned up to' '$W/s128/err'" \
     "surf128 without i,j,k: face 0's turned normals on standard error"
+  check "grep -q 'warning: face 0 bends tighter than the tip (a radius of .* mm at u .*): its radius offset folds over there and is up to .* mm off' '$W/s128/err'" \
+    "surf128 without i,j,k: face 0's folded offset on standard error"
   check_result "rows_within '$W/s128' edge 4 12" "surf128 without i,j,k: edge rows within std 4 um, max 12 um"
 fi
 exit $fail
