@@ -73,6 +73,14 @@ cad::ModelPoint match_as_hint(const registration::PointMatch& m) {
   return hint;
 }
 
+// The contact of a tip whose centre `raw` (machine frame; `x` in the CAD frame) touched the nominal part where it is
+// nearest: towards that point `foot`, from a centre inside the material too (a face whose material side is wrong:
+// surf128's face 2, whose contacts were put 2r away, on the far side of the centre), as its deviation says.
+Point3 contact_towards(const Point3& raw, double r, const geometry::RigidTransform& T, const Point3& x,
+                       const cad::ModelPoint& foot) {
+  return raw - r * (T.linear() * (x - foot.point).normalized());
+}
+
 // A fitted row whose contact normal is turned more than this (degrees) from the nominal part's normal at its
 // correspondence: no deformation of a part measured against its CAD model tilts its surface that far (the shape
 // suite's steepest dents: 26°), so the fit has followed something else there. On surf128's narrow end, where the
@@ -104,8 +112,8 @@ void turned_normal_warnings(const cad::Model& work, std::span<const CompensatedP
     std::snprintf(angle, sizeof angle, "%.0f", t.angle * 180.0 / std::numbers::pi);
     warnings.push_back("face " + std::to_string(face) + ": at " + std::to_string(t.rows) + " row" +
                        (t.rows == 1 ? "" : "s") + " the fitted normal is turned up to " + angle +
-                       "° from the nominal part's, more than a deformation does (the fit followed something else: "
-                       "where the face bends tighter than the tip, its radius offset folds): their u holds the "
+                       "° from the nominal part's, more than a deformation does (the fit followed something else, "
+                       "as where a face's radius offset folds over): their u holds the "
                        "distance to the contact the nominal part gives, up to " + detail::mm(t.distance) + " mm" +
                        (t.inside_out > 0 ? "; the " + std::to_string(t.inside_out) +
                                                " turned past 90° (the fit inside out) are outliers"
@@ -183,10 +191,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
     c.face = work.faces[static_cast<std::size_t>(foot.face)].index;
     c.normal = T.linear() * towards;
     const double r = radii[k];
-    // The tip touched the part where it is nearest its centre: the contact lies towards that point, from a centre
-    // inside the material too (a face whose material side is wrong; surf128's face 2, whose contacts were put 2r
-    // away, on the far side of the centre), as its deviation says.
-    c.contact = raw[k] - r * (T.linear() * (x - foot.point).normalized());
+    c.contact = contact_towards(raw[k], r, T, x, foot);
     c.deviation = foot.distance - (foot.distance < 0.0 ? -r : r);
     c.uncertainty = registration.scale;
     // A tip past a fitted face's edge touched the part's rim, which the part's deformation moved with the face: its
@@ -272,8 +277,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
       const Point3 x = to_cad * raw[k];
       const cad::ModelPoint near = prepared.nominal_locator->closest_point(x, match_as_hint(m));
       if (near.ok() && (x - near.point).norm() > 0.0) {
-        const Vector3 towards = (near.distance < 0.0 ? -1.0 : 1.0) * (x - near.point).normalized();
-        disagreement[k] = (c.contact - (raw[k] - radii[k] * (T.linear() * towards))).norm();
+        disagreement[k] = (c.contact - contact_towards(raw[k], radii[k], T, x, near)).norm();
       }
       c.uncertainty = std::hypot(c.uncertainty, disagreement[k]);
       if (cos_turn < 0.0) c.status = PointStatus::Outlier;
