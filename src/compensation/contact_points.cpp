@@ -91,8 +91,7 @@ Point3 contact_towards(const Point3& raw, double r, const geometry::RigidTransfo
 constexpr double kTurnedDegrees = 45.0;
 
 // One warning per face with turned rows: how many, the largest turn and disagreement, and the outliers.
-void turned_normal_warnings(const cad::Model& work, std::span<const CompensatedPoint> out,
-                            std::span<const registration::PointMatch> matches, std::span<const double> turned,
+void turned_normal_warnings(std::span<const CompensatedPoint> out, std::span<const double> turned,
                             std::span<const double> disagreement, std::vector<std::string>& warnings) {
   struct Tally {
     int rows = 0, inside_out = 0;
@@ -101,7 +100,7 @@ void turned_normal_warnings(const cad::Model& work, std::span<const CompensatedP
   std::map<int, Tally> by_face;
   for (std::size_t k = 0; k < out.size(); ++k) {
     if (!(turned[k] > 0.0)) continue;
-    Tally& t = by_face[work.faces[static_cast<std::size_t>(matches[k].face)].index];
+    Tally& t = by_face[out[k].face];
     ++t.rows;
     t.inside_out += turned[k] > std::numbers::pi / 2.0;
     t.angle = std::max(t.angle, turned[k]);
@@ -304,7 +303,7 @@ std::vector<CompensatedPoint> compensate_points(const PreparedModel& prepared, s
       c.uncertainty = std::sqrt(c.uncertainty * c.uncertainty + std::max(reg, 0.0));
     }
   });
-  if (warnings != nullptr) turned_normal_warnings(work, out, registration.matches, turned, disagreement, *warnings);
+  if (warnings != nullptr) turned_normal_warnings(out, turned, disagreement, *warnings);
   std::map<int, nurbs::ClosestPointSolver> solvers;  // built for the faces that need one
   for (std::size_t k = 0; k < raw.size(); ++k) {
     if (!retry[k]) continue;
