@@ -6,30 +6,47 @@
 
 namespace probecomp::fitting::detail {
 
-// In-place Cholesky factor L (N = L·Lᵀ) of a band matrix, row by row (the band keeps no fill outside it):
-// L_IJ = (N_IJ − Σ_{m<J} L_Im L_Jm) / L_JJ. Each entry of row I, once known, is taken at once from all the row's
-// later entries (L_IJ' −= L_IJ · L_J'J, J' > J), so that the row's sums advance side by side instead of one long
-// chain of dependent subtractions after another; each sum still takes its terms in the order m = 0, 1, …, so the
-// factor is the same to the last bit.
+namespace {
+
+// Σ_m x_m y_m over columns m = first … last − 1 (x and y point at column first), in four partial sums by column
+// mod 4, added at the end: a fixed order, so the same bits on every machine and thread count, that the compiler keeps
+// in vector registers (one running sum is a chain of dependent additions it may not reorder without -ffast-math).
+// Sums by column, not by position, so that the zeros outside an envelope change no bit (their products add +0).
+double dot(const double* x, const double* y, int first, int last) {
+  double s[4] = {0.0, 0.0, 0.0, 0.0};
+  int m = first;
+  for (; m < last && (m & 3) != 0; ++m, ++x, ++y) s[m & 3] += *x * *y;
+  for (; m + 4 <= last; m += 4, x += 4, y += 4) {
+    s[0] += x[0] * y[0];
+    s[1] += x[1] * y[1];
+    s[2] += x[2] * y[2];
+    s[3] += x[3] * y[3];
+  }
+  for (; m < last; ++m, ++x, ++y) s[m & 3] += *x * *y;
+  return (s[0] + s[1]) + (s[2] + s[3]);
+}
+
+}  // namespace
+
+// In-place Cholesky factor L (N = L·Lᵀ) of a band matrix, row by row (the band keeps no fill outside it; Golub and
+// Van Loan, Algorithm 4.3.5): L_IJ = (N_IJ − Σ_m L_Im L_Jm) / L_JJ over the columns m < J both rows may hold. Rows
+// are contiguous in the band's layout, so each sum is a dot product of two contiguous runs (dot above).
 bool cholesky(Band& L) {
   const int b = L.b;
   const std::size_t stride = static_cast<std::size_t>(b) + 1;
+  // &L_I,m: row I's storage is shifted by I − b.
+  auto entry = [&](int I, int m) { return &L.a[static_cast<std::size_t>(I) * stride + static_cast<std::size_t>(m - I + b)]; };
   for (int I = 0; I < L.n; ++I) {
     const int m0 = L.row_start(I);
-    double* rowI = &L.a[static_cast<std::size_t>(I) * stride + static_cast<std::size_t>(m0 - I + b)];  // L_I,m0+t
-    const int width = I - m0;
-    for (int t = 0; t < width; ++t) {
-      const int J = m0 + t;
-      const double l = rowI[t] / L.at(J, J);
-      rowI[t] = l;
-      // L_J',J for J' = J+1 … I: b doubles apart (one band row on, one column back).
-      const double* column = &L.a[static_cast<std::size_t>(J + 1) * stride + static_cast<std::size_t>(b - 1)];
-      for (int t2 = t + 1; t2 < width; ++t2) rowI[t2] -= l * column[static_cast<std::size_t>(t2 - t - 1) * b];
-      rowI[width] -= l * l;
+    double* rowI = entry(I, m0);
+    for (int J = m0; J < I; ++J) {
+      const int start = std::max(m0, L.row_start(J));
+      const double s = rowI[J - m0] - dot(entry(I, start), entry(J, start), start, J);
+      rowI[J - m0] = s / *entry(J, J);
     }
-    const double s = rowI[width];
+    const double s = rowI[I - m0] - dot(rowI, rowI, m0, I);
     if (!(s > 0.0) || !std::isfinite(s)) return false;
-    rowI[width] = std::sqrt(s);
+    rowI[I - m0] = std::sqrt(s);
   }
   return true;
 }
@@ -53,22 +70,34 @@ std::vector<int> column_ends(const Band& L) {
 
 }  // namespace
 
-// x = (L·Lᵀ)⁻¹ r for the three columns of r (n × 3, row major), in place.
+// x = (L·Lᵀ)⁻¹ r for the three columns of r (n × 3, row major), in place: L y = r forward, row by row, and Lᵀ x = y
+// backward, column by column (column I of Lᵀ is row I of L), so both sweeps read L's rows in contiguous runs.
 void solve(const Band& L, std::vector<double>& r) {
   const int n = L.n;
   for (int I = 0; I < n; ++I) {
-    for (int c = 0; c < 3; ++c) {
-      double s = r[3 * I + c];
-      for (int m = L.row_start(I); m < I; ++m) s -= L.at(I, m) * r[3 * m + c];
-      r[3 * I + c] = s / L.at(I, I);
+    double s0 = r[3 * I], s1 = r[3 * I + 1], s2 = r[3 * I + 2];
+    for (int m = L.row_start(I); m < I; ++m) {
+      const double l = L.at(I, m);
+      s0 -= l * r[3 * m];
+      s1 -= l * r[3 * m + 1];
+      s2 -= l * r[3 * m + 2];
     }
+    const double d = L.at(I, I);
+    r[3 * I] = s0 / d;
+    r[3 * I + 1] = s1 / d;
+    r[3 * I + 2] = s2 / d;
   }
-  const std::vector<int> last = column_ends(L);
   for (int I = n - 1; I >= 0; --I) {
-    for (int c = 0; c < 3; ++c) {
-      double s = r[3 * I + c];
-      for (int k = I + 1; k <= last[static_cast<std::size_t>(I)]; ++k) s -= L.at(k, I) * r[3 * k + c];
-      r[3 * I + c] = s / L.at(I, I);
+    const double d = L.at(I, I);
+    const double x0 = r[3 * I] / d, x1 = r[3 * I + 1] / d, x2 = r[3 * I + 2] / d;
+    r[3 * I] = x0;
+    r[3 * I + 1] = x1;
+    r[3 * I + 2] = x2;
+    for (int m = L.row_start(I); m < I; ++m) {
+      const double l = L.at(I, m);
+      r[3 * m] -= l * x0;
+      r[3 * m + 1] -= l * x1;
+      r[3 * m + 2] -= l * x2;
     }
   }
 }
@@ -77,17 +106,18 @@ void solve(const Band& L, std::vector<double>& r) {
 // triangle is diag(1/L_ii), Z_ij = (δ_ij / L_ii − Σ_{k>i} L_ki Z_kj) / L_ii for j ≥ i, from the last row up.
 // Every Z_kj the sum needs has i < k, j ≤ i + b, inside the band already computed. Upper half by rows:
 // Z(i, j), i ≤ j ≤ i + b, at z[i·(b+1) + j − i].
-// Row i's sums for j > i advance side by side, one k at a time (each still takes its terms in the order k = i+1, i+2,
-// …: the same Z to the last bit), over contiguous memory: Z_kj for j ≥ k is row k of z, and for j < k (Z_jk) row k of
-// a copy of the band's lower half, kept for the b rows below i only (a ring of b + 1 rows).
+// Row i's sums for j > i advance side by side, four k at a time (one pass over the sums for four rows of Z), over
+// contiguous memory: each row k of Z the sums need, both halves (Z_kj, k − b ≤ j ≤ k + b), is kept whole in a ring
+// of b + 1 rows. The terms are grouped by k − i, so that the zeros an envelope skips change no bit.
 std::vector<double> band_inverse(const Band& L) {
   const int n = L.n, b = L.b;
   const std::size_t stride = static_cast<std::size_t>(b) + 1;
+  const std::size_t full = 2 * static_cast<std::size_t>(b) + 1;
   std::vector<double> z(static_cast<std::size_t>(n) * stride, 0.0);
-  // lower(k, j) = Z_jk for k − b ≤ j < k, at ring[(k mod (b+1))·(b+1) + j − k + b].
-  std::vector<double> ring(stride * stride, 0.0);
-  auto ring_row = [&](int k) { return &ring[static_cast<std::size_t>(k % (b + 1)) * stride]; };
-  std::vector<double> column(stride), sum(stride);
+  // Z_kj at ring_row(k)[j − k + b], k − b ≤ j ≤ k + b, for the b + 1 rows k below and at i.
+  std::vector<double> ring(stride * full, 0.0);
+  auto ring_row = [&](int k) { return &ring[static_cast<std::size_t>(k % (b + 1)) * full]; };
+  std::vector<double> column(stride), sum(stride), zeros(stride, 0.0);
   const std::vector<int> ends = column_ends(L);
   for (int i = n - 1; i >= 0; --i) {
     const int last = ends[static_cast<std::size_t>(i)];
@@ -95,21 +125,32 @@ std::vector<double> band_inverse(const Band& L) {
     for (int k = i + 1; k <= last; ++k) column[static_cast<std::size_t>(k - i)] = L.at(k, i);
     const double d = L.at(i, i);
     std::fill(sum.begin(), sum.begin() + width + 1, 0.0);  // sum[j − i], j = i+1 … last
-    for (int k = i + 1; k <= last; ++k) {
-      const double c = column[static_cast<std::size_t>(k - i)];
-      const double* lower = ring_row(k) + (b - k + i);                          // lower[j − i] = Z_jk, j < k
-      const double* upper = &z[static_cast<std::size_t>(k) * stride] - (k - i);  // upper[j − i] = Z_kj, j ≥ k
-      for (int t = 1; t < k - i; ++t) sum[static_cast<std::size_t>(t)] -= c * lower[t];
-      for (int t = k - i; t <= width; ++t) sum[static_cast<std::size_t>(t)] -= c * upper[t];
+    // row(k)[t] = Z_k,i+t (its entries for j < i + 1 and j > last are not read).
+    auto row = [&](int k) { return ring_row(k) + (i - k + b); };
+    // The last group padded with zero terms (c = 0 against a row of zeros), not taken one by one: the same rounding
+    // as the full band's group there, whose extra terms are zeros too.
+    for (int k = i + 1; k <= last; k += 4) {
+      const double* r[4];
+      double c[4];
+      for (int g = 0; g < 4; ++g) {
+        const bool inside = k + g <= last;
+        c[g] = inside ? column[static_cast<std::size_t>(k + g - i)] : 0.0;
+        r[g] = inside ? row(k + g) : zeros.data();
+      }
+      for (int t = 1; t <= width; ++t) sum[static_cast<std::size_t>(t)] -= (c[0] * r[0][t] + c[1] * r[1][t]) + (c[2] * r[2][t] + c[3] * r[3][t]);
     }
     double* zi = &z[static_cast<std::size_t>(i) * stride];
+    double* own = ring_row(i);
+    std::fill(own, own + full, 0.0);  // the slot held row i + b + 1; its lower half is written by the rows above
     for (int t = 1; t <= width; ++t) {
       zi[t] = sum[static_cast<std::size_t>(t)] / d;
-      ring_row(i + t)[static_cast<std::size_t>(b - t)] = zi[t];  // lower(i + t, i)
+      own[static_cast<std::size_t>(b + t)] = zi[t];                   // Z_i,i+t
+      ring_row(i + t)[static_cast<std::size_t>(b - t)] = zi[t];       // Z_i+t,i
     }
     double s = 1.0 / d;
     for (int t = 1; t <= width; ++t) s -= column[static_cast<std::size_t>(t)] * zi[t];
     zi[0] = s / d;
+    own[static_cast<std::size_t>(b)] = zi[0];
   }
   return z;
 }

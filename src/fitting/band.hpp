@@ -38,16 +38,6 @@ struct Band {
   [[nodiscard]] int row_start(int I) const { return first.empty() ? std::max(0, I - b) : first[static_cast<std::size_t>(I)]; }
   [[nodiscard]] double& at(int I, int J) { return a[static_cast<std::size_t>(I) * (b + 1) + (J - I + b)]; }
   [[nodiscard]] double at(int I, int J) const { return a[static_cast<std::size_t>(I) * (b + 1) + (J - I + b)]; }
-  // += scale · v vᵀ over the unknowns idx[0..m).
-  void add_outer(const int* idx, const double* v, int m, double scale) {
-    for (int x = 0; x < m; ++x) {
-      const double sx = scale * v[x];
-      if (sx == 0.0) continue;
-      for (int y = 0; y < m; ++y) {
-        if (idx[y] <= idx[x]) at(idx[x], idx[y]) += sx * v[y];
-      }
-    }
-  }
   void add(const Band& o, double scale = 1.0) {
     for (std::size_t k = 0; k < a.size(); ++k) a[k] += scale * o.a[k];
   }

@@ -111,8 +111,12 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
     if (!D) G = ThinPlateTerms{Band(rows, b), Band(rows, b), Band(rows, b)};
     RationalBasisD2 d2;
     const int m_max = thb ? std::max(thb->max_row, (p + 1) * (q + 1)) : (p + 1) * (q + 1);
-    std::vector<int> idx_store(static_cast<std::size_t>(m_max)), shifted(idx_store);
+    std::vector<int> idx_store(static_cast<std::size_t>(m_max));
     std::vector<double> uu(static_cast<std::size_t>(m_max)), uv(uu), vv(uu);
+    // A span's functions are the same at all its Gauss points: their products are summed over the span in a dense
+    // block first (lower triangle by position, [x·m + y], y ≤ x), added into the bands once per span.
+    const auto block_size = static_cast<std::size_t>(m_max) * static_cast<std::size_t>(m_max);
+    std::vector<double> block_uu(block_size), block_uv(block_size), block_vv(block_size);
     int* idx = idx_store.data();
     int m = (p + 1) * (q + 1);
     for (int o = n_outer * c / chunks; o < n_outer * (c + 1) / chunks; ++o) {
@@ -126,6 +130,9 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
         const double va = bv[static_cast<std::size_t>(e)], vb = bv[static_cast<std::size_t>(e) + 1];
         const int sv = span_v[static_cast<std::size_t>(e)];
         const double jac = 0.25 * (ub - ua) * (vb - va) * phi;
+        std::fill(block_uu.begin(), block_uu.end(), 0.0);
+        std::fill(block_uv.begin(), block_uv.end(), 0.0);
+        std::fill(block_vv.begin(), block_vv.end(), 0.0);
         for (std::size_t gu = 0; gu < kGaussNodes.size(); ++gu) {
           const double u = 0.5 * (ua + ub) + 0.5 * (ub - ua) * kGaussNodes[gu];
           for (std::size_t gv = 0; gv < kGaussNodes.size(); ++gv) {
@@ -157,13 +164,33 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
               energy += w * (cuu * duu.squaredNorm() + cuv * duv.squaredNorm() + cvv * dvv.squaredNorm());
               continue;
             }
-            for (int k = 0; k < m; ++k) shifted[static_cast<std::size_t>(k)] = idx[k] - shift;
-            G.uu.add_outer(shifted.data(), Ruu, m, w * cuu);
-            G.uv.add_outer(shifted.data(), Ruv, m, w * cuv);
-            G.vv.add_outer(shifted.data(), Rvv, m, w * cvv);
+            const double wuu = w * cuu, wuv = w * cuv, wvv = w * cvv;
+            for (int k = 0; k < m; ++k) {
+              const double fuu = wuu * Ruu[k], fuv = wuv * Ruv[k], fvv = wvv * Rvv[k];
+              double* row_uu = &block_uu[static_cast<std::size_t>(k * m)];
+              double* row_uv = &block_uv[static_cast<std::size_t>(k * m)];
+              double* row_vv = &block_vv[static_cast<std::size_t>(k * m)];
+              for (int l = 0; l <= k; ++l) {
+                row_uu[l] += fuu * Ruu[l];
+                row_uv[l] += fuv * Ruv[l];
+                row_vv[l] += fvv * Rvv[l];
+              }
+            }
           }
         }
-        if (D) (*span_energy)[static_cast<std::size_t>(a) * nsv + e] = energy;
+        if (D) {
+          (*span_energy)[static_cast<std::size_t>(a) * nsv + e] = energy;
+          continue;
+        }
+        for (int k = 0; k < m; ++k) {
+          for (int l = 0; l <= k; ++l) {
+            const int I = std::max(idx[k], idx[l]) - shift, J = std::min(idx[k], idx[l]) - shift;
+            const auto at = static_cast<std::size_t>(k * m + l);
+            G.uu.at(I, J) += block_uu[at];
+            G.uv.at(I, J) += block_uv[at];
+            G.vv.at(I, J) += block_vv[at];
+          }
+        }
       }
     }
   });

@@ -54,29 +54,43 @@ std::vector<double> errors_against(const cad::ModelLocator& part, const compensa
   return e;
 }
 
+namespace {
+
+std::vector<simulation::Touch> touches_on(const cad::ModelLocator& actual, const SimulatedMeasurement& m) {
+  std::vector<simulation::Touch> touches = simulation::simulate_touches(
+      actual, m.plan,
+      {.probe_radius = m.probe_radius, .probe_radii = m.probe_radii, .noise_sigma = m.noise_sigma, .seed = m.seed,
+       .pretravel = m.pretravel});
+  if (m.repeats_are_copies) {
+    for (std::size_t k = 1; k < touches.size(); ++k) {
+      if (m.plan[k].point == m.plan[k - 1].point && m.plan[k].normal == m.plan[k - 1].normal) {
+        touches[k] = touches[k - 1];
+      }
+    }
+  }
+  for (std::size_t k = 0; k < touches.size(); ++k) {
+    if (touches[k].status == simulation::Touch::Status::Missed) {
+      throw InputError("simulated measurement: programmed point " + std::to_string(k + 1) +
+                                  " misses the actual part");
+    }
+  }
+  return touches;
+}
+
+}  // namespace
+
+std::vector<simulation::Touch> simulate_measurement(const SimulatedMeasurement& m) {
+  const cad::Model actual = simulation::actual_model(m.nominal, m.deformation, m.placement);
+  return touches_on(cad::ModelLocator(actual), m);
+}
+
 MethodComparison compare_methods(const SimulatedMeasurement& m, const ComparisonOptions& options) {
   MethodComparison out;
   geometry::Stopwatch clock;
   const cad::Model actual = simulation::actual_model(m.nominal, m.deformation, m.placement);
   const cad::ModelLocator actual_locator(actual);
-  out.touches = simulation::simulate_touches(
-      actual_locator, m.plan,
-      {.probe_radius = m.probe_radius, .probe_radii = m.probe_radii, .noise_sigma = m.noise_sigma, .seed = m.seed,
-       .pretravel = m.pretravel});
-  if (m.repeats_are_copies) {
-    for (std::size_t k = 1; k < out.touches.size(); ++k) {
-      if (m.plan[k].point == m.plan[k - 1].point && m.plan[k].normal == m.plan[k - 1].normal) {
-        out.touches[k] = out.touches[k - 1];
-      }
-    }
-  }
+  out.touches = touches_on(actual_locator, m);
   out.simulate_seconds = clock.restart();
-  for (std::size_t k = 0; k < out.touches.size(); ++k) {
-    if (out.touches[k].status == simulation::Touch::Status::Missed) {
-      throw InputError("simulated measurement: programmed point " + std::to_string(k + 1) +
-                                  " misses the actual part");
-    }
-  }
 
   std::vector<Point3> raw;
   std::vector<Vector3> normals;

@@ -34,18 +34,25 @@ RegionShares region_coverage_2u(std::span<const double> error, std::span<const d
   return share;
 }
 
+SimulatedMeasurement shape_case_measurement(const simulation::ShapeCase& c) {
+  cad::Model nominal = simulation::base_model(c.base);
+  std::vector<simulation::ProgrammedPoint> plan = simulation::plan_of(c, nominal);
+  simulation::Deformation deformation = simulation::deformation_of(c, nominal);
+  return {.nominal = std::move(nominal),
+          .deformation = std::move(deformation),
+          .placement = c.placement(),
+          .plan = std::move(plan),
+          .probe_radius = c.probe_radius,
+          .noise_sigma = c.noise_sigma,
+          .seed = c.seed + c.noise_draw * kNoiseDrawStride};
+}
+
 ShapeCaseResult run_shape_case(const simulation::ShapeCase& c, const compensation::CompensateOptions& options) {
   ShapeCaseResult out;
   out.shape = c;
-  out.nominal = simulation::base_model(c.base);
-  out.plan = simulation::plan_of(c, out.nominal);
-  const SimulatedMeasurement m{.nominal = out.nominal,
-                               .deformation = simulation::deformation_of(c, out.nominal),
-                               .placement = c.placement(),
-                               .plan = out.plan,
-                               .probe_radius = c.probe_radius,
-                               .noise_sigma = c.noise_sigma,
-                               .seed = c.seed + c.noise_draw * kNoiseDrawStride};
+  const SimulatedMeasurement m = shape_case_measurement(c);
+  out.nominal = m.nominal;
+  out.plan = m.plan;
   const bool normals = c.sampling != simulation::Sampling::ScanLines && c.approach_normals;
   static_cast<MethodComparison&>(out) = compare_methods(m, {.approach_normals = normals, .compensate = options});
 

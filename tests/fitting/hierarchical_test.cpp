@@ -57,21 +57,33 @@ Surface with_spans(const Surface& s) {
   return r.U().num_spans() < 4 ? nurbs::refine_knots_u(r, new_knots(r.U())) : r;
 }
 
-// Least-squares fit of the displacement field `target(t)` (mm) by the basis's functions at the points: the largest
-// residual. Zero (to rounding) where the field lies in the THB space.
-double worst_misfit(const HierarchicalBasis& basis, const std::vector<fitting::SurfaceParameter>& t,
-                    const std::function<double(const fitting::SurfaceParameter&)>& target, Eigen::Index* rank = nullptr) {
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(t.size()), basis.unknowns);
-  Eigen::VectorXd y(static_cast<Eigen::Index>(t.size()));
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    const HierarchicalRow row = hierarchical_row(basis, t[k].u, t[k].v);
-    for (std::size_t e = 0; e < row.unknown.size(); ++e) A(static_cast<Eigen::Index>(k), row.unknown[e]) = row.value[e];
-    y(static_cast<Eigen::Index>(k)) = target(t[k]);
+// The basis's functions sampled at the points (the design matrix) and its pivoted QR, factored once for every field
+// fitted at those points.
+class SampledBasis {
+ public:
+  SampledBasis(const HierarchicalBasis& basis, const std::vector<fitting::SurfaceParameter>& t)
+      : t_(t), A_(Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(t.size()), basis.unknowns)) {
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      const HierarchicalRow row = hierarchical_row(basis, t[k].u, t[k].v);
+      for (std::size_t e = 0; e < row.unknown.size(); ++e) A_(static_cast<Eigen::Index>(k), row.unknown[e]) = row.value[e];
+    }
+    qr_.compute(A_);
   }
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
-  if (rank) *rank = qr.rank();
-  return (A * qr.solve(y) - y).lpNorm<Eigen::Infinity>();
-}
+  // As many as the functions where they are independent.
+  [[nodiscard]] Eigen::Index rank() const { return qr_.rank(); }
+  // Least-squares fit of the displacement field `target(t)` (mm) by the functions at the points: the largest
+  // residual. Zero (to rounding) where the field lies in the THB space.
+  [[nodiscard]] double worst_misfit(const std::function<double(const fitting::SurfaceParameter&)>& target) const {
+    Eigen::VectorXd y(static_cast<Eigen::Index>(t_.size()));
+    for (std::size_t k = 0; k < t_.size(); ++k) y(static_cast<Eigen::Index>(k)) = target(t_[k]);
+    return (A_ * qr_.solve(y) - y).lpNorm<Eigen::Infinity>();
+  }
+
+ private:
+  const std::vector<fitting::SurfaceParameter>& t_;
+  Eigen::MatrixXd A_;
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr_;
+};
 
 // At 10 000 random points of s: the functions non-zero there are ≥ 0 and sum to 1.
 void expect_partition_of_unity(const HierarchicalBasis& basis, const Surface& s, std::uint64_t seed) {
@@ -130,17 +142,17 @@ TEST(HierarchicalBasis, HoldsTheStartsSpaceAndALevelOneBumpInsideTheRefinedCells
     ASSERT_GT(basis.refined_unknowns, 0);
     const auto t = random_thb_parameters(s, 4 * basis.unknowns, 9);
     // The functions are independent: as many as the sampled design matrix's rank.
-    Eigen::Index rank = 0;
+    const SampledBasis sampled(basis, t);
     // A displacement of the start's own control net (its z), through the tensor evaluator.
     std::mt19937_64 rng(17);
     std::uniform_real_distribution<double> nudge(-0.05, 0.05);
     std::vector<HomogeneousPoint> Pw = s.homogeneous();
     for (auto& h : Pw) h.z() += h.w() * nudge(rng);
     const Surface moved(s.U(), s.V(), Pw);
-    const double in_start_space = worst_misfit(basis, t, [&](const SurfaceParameter& x) {
+    const double in_start_space = sampled.worst_misfit([&](const SurfaceParameter& x) {
       return (nurbs::evaluate(moved, x.u, x.v) - nurbs::evaluate(s, x.u, x.v)).z();
-    }, &rank);
-    EXPECT_EQ(rank, basis.unknowns);
+    });
+    EXPECT_EQ(sampled.rank(), basis.unknowns);
     EXPECT_LE(in_start_space, 1e-11);
     // One control point of the start refined to level 1 (every span halved) moved by 0.1 mm: a bump of one level-1
     // B-spline; the one at (4, 4) has its support in the 4 × 4 cells (bicubic: spans 0.5 to 2.5), the one near the
@@ -154,7 +166,7 @@ TEST(HierarchicalBasis, HoldsTheStartsSpaceAndALevelOneBumpInsideTheRefinedCells
       std::vector<HomogeneousPoint> Q = level1.homogeneous();
       Q[static_cast<std::size_t>(k * level1.num_v() + l)].z() += 0.1 * Q[static_cast<std::size_t>(k * level1.num_v() + l)].w();
       const Surface bumped(level1.U(), level1.V(), Q);
-      return worst_misfit(basis, t, [&](const SurfaceParameter& x) {
+      return sampled.worst_misfit([&](const SurfaceParameter& x) {
         return (nurbs::evaluate(bumped, x.u, x.v) - nurbs::evaluate(level1, x.u, x.v)).z();
       });
     };
@@ -340,11 +352,11 @@ TEST(HierarchicalBasis, ThreeLevelsHoldWhatEachLevelsDomainAllowsAndNoMore) {
     std::vector<HomogeneousPoint> Pw = s.homogeneous();
     for (auto& h : Pw) h.z() += h.w() * nudge(rng);
     const Surface moved(s.U(), s.V(), Pw);
-    Eigen::Index rank = 0;
-    EXPECT_LE(worst_misfit(basis, t, [&](const SurfaceParameter& x) {
+    const SampledBasis sampled(basis, t);
+    EXPECT_LE(sampled.worst_misfit([&](const SurfaceParameter& x) {
       return (nurbs::evaluate(moved, x.u, x.v) - nurbs::evaluate(s, x.u, x.v)).z();
-    }, &rank), 1e-11);
-    EXPECT_EQ(rank, basis.unknowns);
+    }), 1e-11);
+    EXPECT_EQ(sampled.rank(), basis.unknowns);
     // A bump of one B-spline of level 1 or 2 (with the level's weights, as the rational space has them): held where
     // its support lies in that level's domain, not where it does not. The domains' corners in parameters:
     const std::vector<double> bu = s.U().breakpoints(), bv = s.V().breakpoints();
@@ -369,7 +381,7 @@ TEST(HierarchicalBasis, ThreeLevelsHoldWhatEachLevelsDomainAllowsAndNoMore) {
       HomogeneousPoint& h = Q[static_cast<std::size_t>(k * fine.num_v() + l)];
       h.z() += 0.1 * h.w();
       const Surface bumped(fine.U(), fine.V(), Q);
-      return worst_misfit(basis, t, [&](const SurfaceParameter& x) {
+      return sampled.worst_misfit([&](const SurfaceParameter& x) {
         return (nurbs::evaluate(bumped, x.u, x.v) - nurbs::evaluate(fine, x.u, x.v)).z();
       });
     };

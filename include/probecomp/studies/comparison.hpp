@@ -55,8 +55,12 @@ struct MethodComparison {
   double simulate_seconds = 0.0, cad_seconds = 0.0, conventional_seconds = 0.0;
 };
 
-// Throws InputError if a programmed point misses the actual part: a study's plan must keep the tip on
-// its faces.
+// The touches the probe records on the actual part (its nominal deformed and placed), one per programmed point,
+// before any method sees them. Throws InputError if a programmed point misses the actual part: a study's plan must
+// keep the tip on its faces.
+[[nodiscard]] std::vector<simulation::Touch> simulate_measurement(const SimulatedMeasurement& m);
+
+// simulate_measurement's touches, compensated by both methods and scored against the actual part (throws as it).
 [[nodiscard]] MethodComparison compare_methods(const SimulatedMeasurement& m, const ComparisonOptions& options = {});
 
 // Signed distance of each trusted (status ok) compensated point from the part; NaN for the others.

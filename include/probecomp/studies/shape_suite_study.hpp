@@ -40,6 +40,10 @@ struct ShapeCaseResult : MethodComparison {
   double fit_rms = 0.0;
 };
 
+// The case's measurement as simulated: its base part, plan, deformation, placement, tip and noise (the seed of its
+// noise draw: ShapeCase::noise_draw).
+[[nodiscard]] SimulatedMeasurement shape_case_measurement(const simulation::ShapeCase& c);
+
 [[nodiscard]] ShapeCaseResult run_shape_case(const simulation::ShapeCase& c,
                                              const compensation::CompensateOptions& options = {});
 
