@@ -3,6 +3,7 @@
 // solves with it and the band of its inverse, and quadratic forms over that inverse. Private to fitting/.
 
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <vector>
 
@@ -47,6 +48,10 @@ struct Band {
     return t;
   }
 };
+
+// The factor and the inverse's band in AVX registers where the CPU has them (true), or in the portable form: the same
+// bits either way (band.cpp); tests set it false to compare.
+extern std::atomic<bool> avx_band_kernels;
 
 // In-place Cholesky factor of a band matrix; false where it is not positive definite (band.cpp).
 bool cholesky(Band& L);
