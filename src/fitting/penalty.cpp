@@ -130,9 +130,11 @@ ThinPlateTerms thin_plate_energy(const Surface& s, const Ordering& order, int b,
         const double va = bv[static_cast<std::size_t>(e)], vb = bv[static_cast<std::size_t>(e) + 1];
         const int sv = span_v[static_cast<std::size_t>(e)];
         const double jac = 0.25 * (ub - ua) * (vb - va) * phi;
-        std::fill(block_uu.begin(), block_uu.end(), 0.0);
-        std::fill(block_uv.begin(), block_uv.end(), 0.0);
-        std::fill(block_vv.begin(), block_vv.end(), 0.0);
+        if (!D) {
+          std::fill(block_uu.begin(), block_uu.end(), 0.0);
+          std::fill(block_uv.begin(), block_uv.end(), 0.0);
+          std::fill(block_vv.begin(), block_vv.end(), 0.0);
+        }
         for (std::size_t gu = 0; gu < kGaussNodes.size(); ++gu) {
           const double u = 0.5 * (ua + ub) + 0.5 * (ub - ua) * kGaussNodes[gu];
           for (std::size_t gv = 0; gv < kGaussNodes.size(); ++gv) {
