@@ -5,11 +5,7 @@
 #include <cmath>
 #include <vector>
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define PROBECOMP_HAVE_AVX_PATH 1
-#else
-#define PROBECOMP_HAVE_AVX_PATH 0
-#endif
+#include "probecomp/geometry/cpu.hpp"
 
 namespace probecomp::fitting::detail {
 
@@ -123,17 +119,13 @@ std::vector<int> column_ends(const Band& L) {
   return z;
 }
 
-
 // The two kernels compiled again for AVX (256-bit registers), chosen at run time where the CPU has it: each lane takes
 // the same multiplications and additions in the same order as the portable form (no fused multiply-add:
 // -ffp-contract=off, and no FMA in the target), so the results are the same bit for bit; tests compare the two.
 #if PROBECOMP_HAVE_AVX_PATH
 __attribute__((target("avx"))) bool cholesky_avx(Band& L) { return cholesky_rows(L); }
 __attribute__((target("avx"))) std::vector<double> inverse_avx(const Band& L) { return inverse_rows(L); }
-bool use_avx() {
-  static const bool usable = __builtin_cpu_supports("avx");
-  return usable && avx_band_kernels.load(std::memory_order_relaxed);
-}
+bool use_avx() { return geometry::cpu_has_avx() && avx_band_kernels.load(std::memory_order_relaxed); }
 #endif
 
 }  // namespace

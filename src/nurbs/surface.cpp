@@ -4,14 +4,12 @@
 #include <cmath>
 #include <string>
 
+#include "probecomp/geometry/cpu.hpp"
 #include "probecomp/nurbs/basis.hpp"
 #include "probecomp/nurbs/knot_insertion.hpp"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if PROBECOMP_HAVE_AVX_PATH
 #include <immintrin.h>
-#define PROBECOMP_HAVE_AVX_PATH 1
-#else
-#define PROBECOMP_HAVE_AVX_PATH 0
 #endif
 
 namespace probecomp::nurbs {
@@ -84,11 +82,6 @@ __attribute__((target("avx"))) void bicubic_tensor_sum_avx(const HomogeneousPoin
   for (int k = 0; k <= D; ++k)
     for (int l = 0; l + k <= D; ++l) _mm256_storeu_pd(A[k][l].data(), a[k][l]);
 }
-
-bool avx_usable() {
-  static const bool usable = __builtin_cpu_supports("avx");
-  return usable;
-}
 #endif
 
 // Derivatives A[k][l] = ∂^{k+l} Sw / ∂u^k ∂v^l of the homogeneous surface for k + l <= D (A3.6).
@@ -122,7 +115,7 @@ void homogeneous_derivatives(const Surface& s, double u, double v, HomogeneousPo
   const HomogeneousPoint* net = s.homogeneous().data();
 #if PROBECOMP_HAVE_AVX_PATH
   if constexpr (P == 3 && Q == 3) {
-    if (avx_usable() && detail::avx_evaluation.load(std::memory_order_relaxed)) {
+    if (geometry::cpu_has_avx() && detail::avx_evaluation.load(std::memory_order_relaxed)) {
       return bicubic_tensor_sum_avx<D>(net + (su - p) * stride + (sv - q), stride, Nu, Nv, A);
     }
   }

@@ -36,6 +36,8 @@ struct Plate {
       }
     }
   }
+  // The contact the nominal plate gives row k: r straight below its centre.
+  [[nodiscard]] Point3 nominal_contact(std::size_t k) const { return raw[k] - kRadius * Vector3::UnitZ(); }
 };
 
 // The fitted centre surface turned by `degrees` about the line x = 20, z = r (along y).
@@ -76,7 +78,7 @@ TEST(TurnedNormal, AnUnturnedFitRaisesNothing) {
   for (std::size_t k = 0; k < run.points.size(); ++k) {
     const CompensatedPoint& c = run.points[k];
     ASSERT_EQ(c.status, PointStatus::Ok) << k;
-    EXPECT_LE((c.contact - (plate.raw[k] - kRadius * Vector3::UnitZ())).norm(), 1e-6) << k;
+    EXPECT_LE((c.contact - plate.nominal_contact(k)).norm(), 1e-6) << k;
     EXPECT_LE(c.uncertainty, 5e-4) << k;
   }
   EXPECT_TRUE(run.warnings.empty()) << run.warnings.front();
@@ -96,7 +98,7 @@ TEST(TurnedNormal, AFitTurnedFurtherThanADeformationTurnsHoldsTheNominalContactI
       const CompensatedPoint& c = run.points[k];
       ASSERT_EQ(c.status, PointStatus::Ok) << k;
       EXPECT_NEAR(std::acos(c.normal.z()) * 180.0 / std::numbers::pi, degrees, 1e-6) << k;
-      const double apart = (c.contact - (plate.raw[k] - kRadius * Vector3::UnitZ())).norm();
+      const double apart = (c.contact - plate.nominal_contact(k)).norm();
       farthest = std::max(farthest, apart);
       if (degrees > 45.0) {
         EXPECT_GE(c.uncertainty, apart) << k;
@@ -126,7 +128,7 @@ TEST(TurnedNormal, AFitInsideOutMakesEveryRowAnOutlier) {
     for (std::size_t k = 0; k < run.points.size(); ++k) {
       const CompensatedPoint& c = run.points[k];
       EXPECT_EQ(c.status, PointStatus::Outlier) << k;
-      EXPECT_GE(c.uncertainty, (c.contact - (plate.raw[k] - kRadius * Vector3::UnitZ())).norm()) << k;
+      EXPECT_GE(c.uncertainty, (c.contact - plate.nominal_contact(k)).norm()) << k;
     }
     ASSERT_EQ(run.warnings.size(), 1u);
     EXPECT_NE(run.warnings[0].find("the 625 turned past 90° (the fit inside out) are outliers"), std::string::npos)
