@@ -177,7 +177,7 @@ int main(int argc, char** argv) {
     for (const simulation::FeatureSpec& f : c.features) features += (features.empty() ? "" : "; ") + simulation::describe(f);
     try {
       const studies::ShapeCaseResult s = studies::run_shape_case(c, options);
-      std::optional<bench::ReferenceScore> reference_stops;
+      std::optional<bench::ReferenceScore> ref;
       r.rows = static_cast<int>(s.plan.size());
       r.std = s.cad_summary.std * 1e3;
       r.mean = s.cad_summary.mean * 1e3;
@@ -189,10 +189,9 @@ int main(int argc, char** argv) {
       r.fit_rms = s.fit_rms * 1e3;
       r.seconds = s.cad_seconds;
       if (reference) {
-        const bench::ReferenceScore ref = bench::score_reference(s, !plain_reference);
-        r.reference_std = ref.std * 1e3;
-        r.reference_max = ref.max_abs * 1e3;
-        reference_stops = ref;
+        ref = bench::score_reference(s, !plain_reference);
+        r.reference_std = ref->std * 1e3;
+        r.reference_max = ref->max_abs * 1e3;
       }
       std::printf("%-22s %5.1f %6d | %6.3f %6.3f %6.2f %4d | %6.1f %6.1f %5.2f | %6.3f | %6.3f %6.2f %5.2f | %s%s\n",
                   r.name.c_str(), r.sigma, r.rows, r.std, r.mean, r.max, r.flagged, r.coverage, r.worst_region, r.mean_u,
@@ -205,9 +204,9 @@ int main(int argc, char** argv) {
                       f.face, f.points, f.control_points, f.effective_dof, f.log10_smoothing, f.noise_sigma * 1e3,
                       f.rounds, f.fits, f.stop_reason.c_str());
         }
-        if (reference_stops) {
-          std::printf("    reference: edf %.1f, log10 lambda along u %+.2f, along v %+.2f\n", reference_stops->edf,
-                      reference_stops->log10_lambda_s, reference_stops->log10_lambda_t);
+        if (ref) {
+          std::printf("    reference: edf %.1f, log10 lambda along u %+.2f, along v %+.2f\n", ref->edf, ref->log10_lambda_s,
+                      ref->log10_lambda_t);
         }
       }
       if (oracle && !s.cad.faces.empty() && s.cad.faces.front().fitted) {
