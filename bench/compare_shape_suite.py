@@ -25,6 +25,8 @@ def read_rows(paths):
                 if 'FAILED' in line:
                     rows[head[0]] = None
                     continue
+                if len(cells) < 5 or len(cells[1].split()) != 4:
+                    continue  # not a case's row (a --seeds table, say, which this does not compare)
                 a, b, ref = cells[1].split(), cells[2].split(), cells[4].split()
                 rows[head[0]] = dict(sigma=float(head[1]), std=float(a[0]), mean=float(a[1]), max=float(a[2]),
                                      flagged=int(a[3]), cov=float(b[0]), worst=float(b[1]), u=float(b[2]),
@@ -34,13 +36,17 @@ def read_rows(paths):
 
 def summary(name, rows):
     ok = [r for r in rows.values() if r is not None]
+    if not ok:
+        print(f"{name}: no case rows read" if not rows else f"{name}: {len(rows)} faces, every one failed")
+        return
     stds = [r['std'] for r in ok]
     print(f"{name}: {len(rows)} faces ({len(rows) - len(ok)} failed) | std median {statistics.median(stds):.3f} "
           f"worst {max(stds):.3f} um | 2u overall median {statistics.median(r['cov'] for r in ok):.1f} lowest "
           f"{min(r['cov'] for r in ok):.1f} % | worst region median {statistics.median(r['worst'] for r in ok):.1f} "
           f"lowest {min(r['worst'] for r in ok):.1f} % ({sum(r['worst'] < 88 for r in ok)} under 88 %) | "
           f"flagged {sum(r['flagged'] for r in ok)}")
-    ratios = [r['ratio'] for name, r in rows.items() if r is not None and name.startswith('S') and not math.isnan(r['ratio'])]
+    ratios = [r['ratio'] for face, r in rows.items()
+              if r is not None and face.startswith('S') and not math.isnan(r['ratio'])]
     if ratios:
         print(f"    suite: std over the reference's median {statistics.median(ratios):.3f} worst {max(ratios):.3f}, "
               f"{sum(x > 1.05 for x in ratios)} above 1.05")
