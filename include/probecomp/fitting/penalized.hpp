@@ -64,7 +64,8 @@ struct PenalizedFitOptions {
   // and the rule would smooth away what the data show (shape suite S13 at 3 000 points: std 0.33 -> 1.01 µm).
   bool smoothest_within_one_standard_error = false;
   // The energy's anisotropy θ (see below), chosen by the same cross-validation after λ unless fixed here (log10)
-  // or turned off (θ = 1). Two decades either way: beyond them one direction's bending costs nothing.
+  // or turned off (θ = 1). Two decades either way: beyond them one direction's bending costs nothing. Chosen on a
+  // fixed grid with a slight preference for θ = 1, so that it moves continuously with the data (see fit_penalized).
   bool anisotropic = true;
   std::optional<double> log10_anisotropy;
   double max_log10_anisotropy = 2.0;
