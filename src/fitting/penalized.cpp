@@ -281,14 +281,20 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
   // The scan's and most trials' penalty is at the starting anisotropy: made once, not once a trial.
   const double a0 = options.log10_anisotropy.value_or(0.0);
   const Band G_start = terms.combined(std::pow(10.0, a0));
-  auto run = [&](double t10, double a10) {
+  auto run_with = [&](const Band& G, double t10, double a10) {
     ++evaluations;
-    std::optional<Band> own;
-    if (a10 != a0) own = terms.combined(std::pow(10.0, a10));
-    const Band& G = own ? *own : G_start;
     Trial t = evaluate(data, G, data_trace / std::max(G.trace(), 1e-300), ridge, t10, rows, options.cross_validation);
     t.log10_anisotropy = a10;
     return t;
+  };
+  auto penalty_at = [&](double a10) {
+    std::optional<Band> own;
+    if (a10 != a0) own = terms.combined(std::pow(10.0, a10));
+    return own;
+  };
+  auto run = [&](double t10, double a10) {
+    const std::optional<Band> own = penalty_at(a10);
+    return run_with(own ? *own : G_start, t10, a10);
   };
   // The trials at(x) for every x, independent: all side by side when their factors and band inverses together are
   // small, else one at a time. Each x's judged score goes to `score` (infinite where the trial failed); the trial
@@ -336,15 +342,11 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
     }
     return t1.cv_score <= t2.cv_score ? std::move(t1) : std::move(t2);
   };
-  // Each trial keeps its factor and its band inverse, so the best one is used as it is, not evaluated again.
-  Trial best;
-  if (options.lambda) {
-    best = run(std::log10(*options.lambda * std::max(G_start.trace(), 1e-300) / data_trace), a0);
-  } else if (options.log10_smoothing) {
-    best = run(*options.log10_smoothing, a0);
-  } else {
-    // A scan in decades, then golden sections of the best decade's two neighbours. A range no wider than two
-    // scan steps (a search near a known λ) is bracketed already: golden sections of it alone.
+  // λ at the starting anisotropy: a scan in decades, then golden sections of the best decade's two neighbours. A
+  // range no wider than two scan steps (a search near a known λ) is bracketed already: golden sections of it alone.
+  auto search_smoothing = [&] {
+    auto at = [&](double x) { return run_with(G_start, x, a0); };
+    Trial found;
     double lo = options.min_log10_smoothing, hi = options.max_log10_smoothing;
     if (hi - lo > 2.0 * options.scan_step) {
       std::vector<double> scan;
@@ -352,42 +354,59 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
         scan.push_back(t10);
       }
       std::vector<double> score(scan.size(), std::numeric_limits<double>::infinity());
-      best = scan_trials(scan, [&](double x) { return run(x, a0); }, [](const Trial& t) { return t.cv_score; }, score);
-      const double best_t = best.ok ? best.log10_smoothing : options.max_log10_smoothing;
+      found = scan_trials(scan, at, [](const Trial& t) { return t.cv_score; }, score);
+      const double best_t = found.ok ? found.log10_smoothing : options.max_log10_smoothing;
       lo = std::max(best_t - options.scan_step, options.min_log10_smoothing);
       hi = std::min(best_t + options.scan_step, options.max_log10_smoothing);
     }
-    Trial g = golden(lo, hi, options.golden_steps, [&](double x) { return run(x, a0); });
-    if (g.cv_score <= best.cv_score) best = std::move(g);
+    Trial g = golden(lo, hi, options.golden_steps, at);
+    if (g.cv_score <= found.cv_score) found = std::move(g);
+    return found;
+  };
+  auto judged = [](const Trial& t) {
+    return t.cv_score * (1.0 + kAnisotropyPrior * t.log10_anisotropy * t.log10_anisotropy);
+  };
+  // θ at the smoothing of `made`, a trial at the starting anisotropy (which stands for its grid point): the grid's
+  // best by the judged score, or the vertex of the parabola through the best three where that is better.
+  auto search_anisotropy = [&](const Trial& made) {
+    const double t10 = made.log10_smoothing;
+    std::vector<double> grid;
+    for (double x = -options.max_log10_anisotropy; x <= options.max_log10_anisotropy + 1e-9; x += kAnisotropyGridStep) {
+      grid.push_back(x);
+    }
+    std::vector<double> score(grid.size(), std::numeric_limits<double>::infinity());
+    Trial a = scan_trials(grid, [&](double x) { return x == a0 ? made : run(t10, x); }, judged, score);
+    const auto kb = static_cast<std::size_t>(std::min_element(score.begin(), score.end()) - score.begin());
+    if (a.ok && kb > 0 && kb + 1 < grid.size() && std::isfinite(score[kb - 1]) && std::isfinite(score[kb + 1])) {
+      const double den = score[kb - 1] - 2.0 * score[kb] + score[kb + 1];
+      if (den > 0.0) {
+        // The vertex of the parabola through three equally spaced points, h (f0 − f2) / (2 (f0 − 2 f1 + f2)) from
+        // the middle one.
+        const double x = grid[kb] + 0.5 * kAnisotropyGridStep * (score[kb - 1] - score[kb + 1]) / den;
+        Trial v = run(t10, x);
+        if (v.ok && judged(v) < judged(a)) a = std::move(v);
+      }
+    }
+    return a;
+  };
+  // Each trial keeps its factor and its band inverse, so the best one is used as it is, not evaluated again.
+  Trial best;
+  if (options.lambda) {
+    best = run(std::log10(*options.lambda * std::max(G_start.trace(), 1e-300) / data_trace), a0);
+  } else if (options.log10_smoothing) {
+    best = run(*options.log10_smoothing, a0);
+  } else {
+    best = search_smoothing();
     // Then the anisotropy at that smoothing, and the smoothing once more near it at the anisotropy found.
     if (options.anisotropic && !options.log10_anisotropy && best.ok) {
       const double t10 = best.log10_smoothing;
-      auto judged = [](const Trial& t) {
-        return t.cv_score * (1.0 + kAnisotropyPrior * t.log10_anisotropy * t.log10_anisotropy);
-      };
-      std::vector<double> grid;
-      for (double x = -options.max_log10_anisotropy; x <= options.max_log10_anisotropy + 1e-9; x += kAnisotropyGridStep) {
-        grid.push_back(x);
-      }
-      std::vector<double> score(grid.size(), std::numeric_limits<double>::infinity());
-      // The grid point at the smoothing's anisotropy is `best` itself: copied, not factorised again.
-      Trial a = scan_trials(grid, [&](double x) { return x == best.log10_anisotropy ? best : run(t10, x); }, judged, score);
-      const auto kb = static_cast<std::size_t>(std::min_element(score.begin(), score.end()) - score.begin());
-      if (a.ok && kb > 0 && kb + 1 < grid.size() && std::isfinite(score[kb - 1]) && std::isfinite(score[kb + 1])) {
-        const double den = score[kb - 1] - 2.0 * score[kb] + score[kb + 1];
-        if (den > 0.0) {
-          // The vertex of the parabola through three equally spaced points, h (f0 − f2) / (2 (f0 − 2 f1 + f2)) from
-          // the middle one.
-          const double x = grid[kb] + 0.5 * kAnisotropyGridStep * (score[kb - 1] - score[kb + 1]) / den;
-          Trial v = run(t10, x);
-          if (v.ok && judged(v) < judged(a)) a = std::move(v);
-        }
-      }
+      Trial a = search_anisotropy(best);
       if (judged(a) < judged(best) && a.log10_anisotropy != best.log10_anisotropy) {
         best = std::move(a);
         const double a10 = best.log10_anisotropy;
+        const std::optional<Band> own = penalty_at(a10);
         Trial t = golden(std::max(t10 - 1.0, options.min_log10_smoothing), std::min(t10 + 1.0, options.max_log10_smoothing),
-                         options.golden_steps, [&](double x) { return run(x, a10); });
+                         options.golden_steps, [&](double x) { return run_with(own ? *own : G_start, x, a10); });
         if (t.cv_score < best.cv_score) best = std::move(t);
       }
     }
