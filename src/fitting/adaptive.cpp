@@ -600,8 +600,9 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
         std::optional<HierarchicalBasis> basis;
         int count = 0;
       };
+      // The refined domains as marked now: the same for every subset of the flagged spans tried below.
+      const detail::LevelFlags domains_now = detail::nested_domains(marks, tbu, tbv, options.local_refinement_ring);
       auto build = [&](const std::vector<char>& to_split) {
-        const detail::LevelFlags domains_now = detail::nested_domains(marks, tbu, tbv, options.local_refinement_ring);
         detail::LevelFlags grown = marks;
         std::vector<char> line_u(tsu, 0), line_v(tsv, 0);
         for (std::size_t s = 0; s < nsu * nsv; ++s) {
