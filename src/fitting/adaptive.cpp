@@ -75,6 +75,14 @@ constexpr double kOwnResidualSigmas = 3.0;
 
 // Half-width, in decades, of the smoothing search after a parameter correction (see fit_surface).
 constexpr double kCorrectionBracket = 0.75;
+// Later rounds seek λ no more than this many decades below the last round's, and, where the residuals show noise,
+// up to the whole range's top. Below, the bound is what holds a fit from swinging between scan lines as λ drifts
+// down round by round (see smoothest_within_one_standard_error below). Above, a bound of the same width capped the
+// choice: along scan lines across a crease (shape suite D707, σ = 4.5 µm) λ sat at the bound round after round,
+// from 10^-8.96 to 10^-4.96 on 330 control points, and the fit rang between the lines (contacts 7.5 µm std, normals
+// up to 11° off; 0.91 µm without the bound). On exact data it stays: a steep dent's largest error rose from under
+// 2 to 2.37 µm without it (Pipeline.ASteepDentWithoutNoiseKeepsEveryRow).
+constexpr double kSmoothingWindow = 2.0;
 
 // Each span's spread (AdaptiveFitResult::span_spread): 1.4826 × the median |standardised residual| over the points
 // in it and the eight around it, never below `sigma`. Each span's neighbourhood is gathered and its median taken on
@@ -692,11 +700,12 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
       }
       span_weight = std::move(w);
     }
-    // Later rounds change the fit locally: the smoothing is sought near the last one. The anisotropy, the face's
-    // deformation's (a wave's or a crease's direction), is chosen again on each net, afresh (see fit_penalized):
-    // a coarse first net cannot show it, and its score may not depend on it at all (shape suite D400, 20 control
-    // points: the same to five digits from θ = 10^-2 to 10^2; the θ taken there, 10^-1.91, kept for seven rounds,
-    // std 1.61 µm; chosen on each net, 0.95 µm; over the suite's 94 faces the std median 1.053 -> 0.996 µm).
+    // Later rounds change the fit locally: the smoothing is sought from kSmoothingWindow below the last one. The
+    // anisotropy, the face's deformation's (a wave's or a crease's direction), is chosen again on each net, afresh
+    // (see fit_penalized): a coarse first net cannot show it, and its score may not depend on it at all (shape
+    // suite D400, 20 control points: the same to five digits from θ = 10^-2 to 10^2; the θ taken there, 10^-1.91,
+    // kept for seven rounds, std 1.61 µm; chosen on each net, 0.95 µm; over the suite's 94 faces the std median
+    // 1.053 -> 0.996 µm).
     // On exact data the first net's θ is kept: between the points only the penalty holds the fit, and the finest
     // nets' scores drift to θ that let it ripple there (S17, a crease on a cylinder, 5 200 control points for
     // 7 020 points: the last net took 10^-1.91 and its contacts were 4.5 µm off, 0.8 µm at the first net's θ).
@@ -709,8 +718,11 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
     fit_options.smoothest_within_one_standard_error =
         fit_options.smoothest_within_one_standard_error && result.noise_sigma > options.noise_floor;
     if (!options.fit.log10_smoothing) {
-      fit_options.min_log10_smoothing = std::max(options.fit.min_log10_smoothing, fit.log10_smoothing - 2.0);
-      fit_options.max_log10_smoothing = std::min(options.fit.max_log10_smoothing, fit.log10_smoothing + 2.0);
+      const double last = fit.log10_smoothing;
+      fit_options.min_log10_smoothing = std::max(options.fit.min_log10_smoothing, last - kSmoothingWindow);
+      fit_options.max_log10_smoothing = result.noise_sigma > options.noise_floor
+                                            ? options.fit.max_log10_smoothing
+                                            : std::min(options.fit.max_log10_smoothing, last + kSmoothingWindow);
     }
     result.knots_inserted += static_cast<int>(xu.size() + xv.size());
     result.rounds = round + 1;

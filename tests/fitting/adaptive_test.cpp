@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -243,8 +244,9 @@ TEST(FitSurface, ABroadMisfitTheSpanTestsCannotSeeIsFollowedFromAFinerStart) {
 // The shape suite's S07 on the patch: a dent 1 mm deep and 1.2 mm wide (σ of a Gaussian; slopes to 27°) beside a
 // bulge 0.25 mm high and 12 mm wide, an 84 × 84 grid (1.2 mm apart) at σ = 4.5 µm. One λ cannot suit both: the
 // penalty's weight must go down at the dent and stay up elsewhere. The weights from the local balance of data and
-// penalty against those from the fit's roughness alone, each fit scored against the truth (seed 21: 0.84 against
-// 1.15 µm rms, largest 8.8 against 16.3 µm).
+// penalty against those from the fit's roughness alone, each fit scored against the truth over five draws of the
+// noise. One draw's largest error is a poor statistic: over seeds 21-30 it ranged from 6.3 to 11.1 µm (balanced)
+// and from 8.6 to 16.9 µm (roughness), so the largest is held by its median over the draws, the rms by its mean.
 TEST(FitSurface, TheBalancedPenaltyFollowsANarrowDentWithoutRoughnessElsewhere) {
   const Surface nominal = nominal_patch();
   const Point3 dent = nurbs::evaluate(nominal, 0.43, 0.57), bulge = nurbs::evaluate(nominal, 0.6, 0.4);
@@ -256,34 +258,51 @@ TEST(FitSurface, TheBalancedPenaltyFollowsANarrowDentWithoutRoughnessElsewhere) 
   };
   constexpr double sigma = 0.0045;
   constexpr int n = 84;
-  constexpr std::uint64_t seed = 21;
-  const Data data = grid_at_cell_centres(nominal, truth, n, sigma, seed);
   struct Score {
     double rms = 0.0, max = 0.0;
   };
-  auto score = [&](const AdaptiveFitResult& fit) {
-    Score out;
-    for (const double e : distances_to_truth(fit, data, truth)) {
-      out.rms += e * e;
-      out.max = std::max(out.max, e);
-    }
-    out.rms = std::sqrt(out.rms / static_cast<double>(data.points.size()));
-    return out;
+  std::vector<Score> balanced, roughness;
+  for (const std::uint64_t seed : test::cases<std::uint64_t>({21, 22, 23, 24, 25})) {
+    const Data data = grid_at_cell_centres(nominal, truth, n, sigma, seed);
+    auto score = [&](const AdaptiveFitResult& fit) {
+      Score out;
+      for (const double e : distances_to_truth(fit, data, truth)) {
+        out.rms += e * e;
+        out.max = std::max(out.max, e);
+      }
+      out.rms = std::sqrt(out.rms / static_cast<double>(data.points.size()));
+      return out;
+    };
+    AdaptiveFitOptions balance;
+    balance.spatial_penalty = AdaptiveFitOptions::SpatialPenalty::Balance;
+    const AdaptiveFitResult fit_b = fit_surface(nominal, data.points, data.params, {}, balance);
+    const AdaptiveFitResult fit_r = fit_surface(nominal, data.points, data.params);
+    ASSERT_TRUE(fit_b.fitted());
+    ASSERT_TRUE(fit_r.fitted());
+    const Score b = score(fit_b), r = score(fit_r);
+    std::printf("seed %d: balanced %d control points, rms %.2f um, largest %.2f um; roughness %d, %.2f um, %.2f um\n",
+                static_cast<int>(seed), fit_b.control_points, b.rms * 1e3, b.max * 1e3, fit_r.control_points,
+                r.rms * 1e3, r.max * 1e3);
+    EXPECT_LT(b.rms, 0.001) << "seed " << seed;
+    balanced.push_back(b);
+    roughness.push_back(r);
+  }
+  auto mean_rms = [](const std::vector<Score>& s) {
+    double sum = 0.0;
+    for (const Score& x : s) sum += x.rms;
+    return sum / static_cast<double>(s.size());
   };
-  AdaptiveFitOptions balance;
-  balance.spatial_penalty = AdaptiveFitOptions::SpatialPenalty::Balance;
-  const AdaptiveFitResult fit_b = fit_surface(nominal, data.points, data.params, {}, balance);
-  const AdaptiveFitResult fit_r = fit_surface(nominal, data.points, data.params);
-  ASSERT_TRUE(fit_b.fitted());
-  ASSERT_TRUE(fit_r.fitted());
-  const Score b = score(fit_b), r = score(fit_r);
-  std::printf("seed %d: balanced %d control points, rms %.2f um, largest %.1f um; roughness %d, %.2f um, %.1f um\n",
-              static_cast<int>(seed), fit_b.control_points, b.rms * 1e3, b.max * 1e3, fit_r.control_points,
-              r.rms * 1e3, r.max * 1e3);
-  EXPECT_LT(b.rms, 0.8 * r.rms);
-  EXPECT_LT(b.rms, 0.001);
-  EXPECT_LT(b.max, 0.010);
-  EXPECT_LT(b.max, r.max);
+  auto median_max = [](std::vector<Score> s) {
+    std::sort(s.begin(), s.end(), [](const Score& x, const Score& y) { return x.max < y.max; });
+    return s[s.size() / 2].max;
+  };
+  std::printf("balanced: mean rms %.3f um, median largest %.2f um; roughness: %.3f um, %.2f um\n",
+              mean_rms(balanced) * 1e3, median_max(balanced) * 1e3, mean_rms(roughness) * 1e3,
+              median_max(roughness) * 1e3);
+  if (test::kLight) return;  // one draw: the figures over the five are held by the Release run (support/light.hpp)
+  EXPECT_LT(mean_rms(balanced), 0.8 * mean_rms(roughness));
+  EXPECT_LT(median_max(balanced), 0.009);
+  EXPECT_LT(median_max(balanced), median_max(roughness));
 }
 
 TEST(FitSurface, NoRefinementWhereTheNominalKnotsAlreadyExplainTheData) {
