@@ -6,12 +6,15 @@
 #include <algorithm>
 #include <numeric>
 
+#include "probecomp/fitting/spans.hpp"
+
 namespace probecomp::fitting::detail {
 
 using nurbs::Surface;
 
 CvRows cv_rows(const RowMaker& maker, std::span<const Point3> points, std::span<const SurfaceParameter> params,
-               std::span<const double> weights) {
+               std::span<const double> weights, const std::vector<double>& fold_u,
+               const std::vector<double>& fold_v) {
   const Surface& s = maker.s;
   const Ordering& order = maker.order;
   const int p = s.p(), q = s.q();
@@ -30,11 +33,30 @@ CvRows cv_rows(const RowMaker& maker, std::span<const Point3> points, std::span<
       key[r] = order.index(s.U().find_span(t.u) - p, s.V().find_span(t.v) - q);
     }
   });
-  std::vector<std::size_t> place(static_cast<std::size_t>(order.nu) * static_cast<std::size_t>(order.nv) + 1, 0);
-  for (const int k : key) ++place[static_cast<std::size_t>(k) + 1];
-  std::partial_sum(place.begin(), place.end(), place.begin());
+  // With folds: each span's rows also by the fold cell they lie in (its spans cut by fold_u and fold_v), so that
+  // the groups left out together are the pieces of the spans those lines cut.
+  std::vector<std::uint32_t> cell;
   std::vector<std::size_t> to(chosen.size());
-  for (std::size_t r = 0; r < chosen.size(); ++r) to[r] = place[static_cast<std::size_t>(key[r])]++;
+  if (!fold_u.empty() && !fold_v.empty()) {
+    const std::size_t nfv = fold_v.size() - 1;
+    cell.resize(chosen.size());
+    for (std::size_t r = 0; r < chosen.size(); ++r) {
+      const SurfaceParameter& t = params[chosen[r]];
+      cell[r] = static_cast<std::uint32_t>(static_cast<std::size_t>(span_of(fold_u, t.u)) * nfv +
+                                           static_cast<std::size_t>(span_of(fold_v, t.v)));
+    }
+    std::vector<std::size_t> order_of(chosen.size());
+    std::iota(order_of.begin(), order_of.end(), std::size_t{0});
+    std::stable_sort(order_of.begin(), order_of.end(), [&](std::size_t x, std::size_t y) {
+      return key[x] != key[y] ? key[x] < key[y] : cell[x] < cell[y];
+    });
+    for (std::size_t at = 0; at < order_of.size(); ++at) to[order_of[at]] = at;
+  } else {
+    std::vector<std::size_t> place(static_cast<std::size_t>(order.nu) * static_cast<std::size_t>(order.nv) + 1, 0);
+    for (const int k : key) ++place[static_cast<std::size_t>(k) + 1];
+    std::partial_sum(place.begin(), place.end(), place.begin());
+    for (std::size_t r = 0; r < chosen.size(); ++r) to[r] = place[static_cast<std::size_t>(key[r])]++;
+  }
   const auto m = static_cast<std::size_t>(maker.m);
   CvRows rows;
   rows.m = static_cast<int>(m);
@@ -52,8 +74,15 @@ CvRows cv_rows(const RowMaker& maker, std::span<const Point3> points, std::span<
       rows.w[at] = weights.empty() ? 1.0 : weights[k];
     }
   });
+  std::vector<std::uint32_t> cell_at;
+  if (!cell.empty()) {
+    cell_at.resize(chosen.size());
+    for (std::size_t r = 0; r < chosen.size(); ++r) cell_at[to[r]] = cell[r];
+  }
   for (std::size_t r = 0; r < chosen.size(); ++r) {
-    if (r == 0 || rows.key[r] != rows.key[r - 1]) rows.span_starts.push_back(r);
+    if (r == 0 || rows.key[r] != rows.key[r - 1] || (!cell_at.empty() && cell_at[r] != cell_at[r - 1])) {
+      rows.span_starts.push_back(r);
+    }
   }
   rows.span_starts.push_back(chosen.size());
   if (stride == 1) {

@@ -37,14 +37,17 @@ struct CvRows {
   // point's basis again: the same numbers.
   static constexpr std::uint32_t kNoRow = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> row_of_point;
-  // Where each knot span's rows begin (rows are in span order), and the end: for leave-span-out.
+  // Where each knot span's rows begin (rows are in span order), and the end: for leave-span-out (with folds, each
+  // piece of a span a fold line cuts).
   std::vector<std::size_t> span_starts;
   [[nodiscard]] bool cover_every_point() const { return !row_of_point.empty(); }
 };
 
-// The rows of the points (every stride-th, weight > 0), in span order.
+// The rows of the points (every stride-th, weight > 0), in span order; with fold breakpoints (PenalizedFitOptions::
+// cv_fold_u, cv_fold_v), each span's rows in the order of the fold cells, span_starts marking each piece.
 [[nodiscard]] CvRows cv_rows(const RowMaker& maker, std::span<const Point3> points,
-                             std::span<const SurfaceParameter> params, std::span<const double> weights);
+                             std::span<const SurfaceParameter> params, std::span<const double> weights,
+                             const std::vector<double>& fold_u = {}, const std::vector<double>& fold_v = {});
 
 // Σ w_k |r_k|² / (1 − h_k)² over the rows (leave_one_out) or each point's residual with its whole knot span left
 // out (leave_span_out), D the trial's displacement (n × 3) and Z its band of the inverse (band_inverse, half-bandwidth b).

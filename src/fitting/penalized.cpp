@@ -264,11 +264,14 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
   ThinPlateTerms terms;
   CvRows rows;
   if (cv_stride(n_points) == 1) {
-    tbb::parallel_invoke([&] { rows = cv_rows(maker, points, params, weights); }, [&] { terms = penalty(); });
+    tbb::parallel_invoke(
+        [&] { rows = cv_rows(maker, points, params, weights, options.cv_fold_u, options.cv_fold_v); },
+        [&] { terms = penalty(); });
     data = assemble_data(maker, b, points, params, weights, &rows);
   } else {
     tbb::parallel_invoke([&] { data = assemble_data(maker, b, points, params, weights, nullptr); },
-                         [&] { terms = penalty(); }, [&] { rows = cv_rows(maker, points, params, weights); });
+                         [&] { terms = penalty(); },
+                         [&] { rows = cv_rows(maker, points, params, weights, options.cv_fold_u, options.cv_fold_v); });
   }
   if (data.used == 0 || !(data.weight_sum > 0.0)) return result;
   data.AtWA.first = detail::envelope(maker);  // every trial's normal matrix and factor inherit it

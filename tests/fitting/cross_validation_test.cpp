@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -12,7 +13,9 @@
 #include "probecomp/fitting/adaptive.hpp"
 #include "probecomp/fitting/offset.hpp"
 #include "probecomp/fitting/penalized.hpp"
+#include "probecomp/fitting/spans.hpp"
 #include "probecomp/nurbs/closest_point.hpp"
+#include "probecomp/nurbs/constructors.hpp"
 #include "probecomp/nurbs/knot_insertion.hpp"
 #include "probecomp/simulation/random.hpp"
 #include "support/test_surfaces.hpp"
@@ -98,6 +101,75 @@ TEST(CrossValidation, OnScanLinesLeavingSpansOutKeepsTheNormalsBetweenTheLines) 
   // that (measured 0.18°, and 0.45° leaving points out; on the shape suite's lines leaving points out swings far
   // more: ShapeSuite.ScanLinesAtThreeMicrometresAreFollowed). 0.5° makes r(1 − cos θ) 38 nm for r = 1 mm.
   EXPECT_LT(by_spans, 0.5);
+}
+
+
+// Leave-span-out with fold lines (PenalizedFitOptions::cv_fold_u, cv_fold_v) against its definition: each piece of
+// a span that the fold lines cut is left out, the fit made again without its points at the same absolute λ and θ,
+// and its points predicted; the score is their mean squared prediction error. Fold lines through every span's
+// middle and a few elsewhere, 600 noisy points on a bent plate.
+TEST(CrossValidation, LeavingOutAPieceOfASpanIsRefittingWithoutIt) {
+  const Surface s = nurbs::make_plane_patch(Point3(0, 0, 0), Vector3(30, 0, 0), Vector3(0, 20, 0), 3, 3, 7, 6);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> at(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.004);
+  std::vector<Point3> points;
+  std::vector<SurfaceParameter> params;
+  for (int k = 0; k < 600; ++k) {
+    const double u = at(rng), v = at(rng);
+    const Point3 x = nurbs::evaluate(s, u, v);
+    points.push_back(x + Vector3(0, 0, 0.05 * std::sin(0.3 * x.x()) * std::cos(0.2 * x.y()) + noise(rng)));
+    params.push_back({u, v});
+  }
+  PenalizedFitOptions o;
+  o.lambda = 1e-3;
+  o.log10_anisotropy = 0.3;
+  o.cross_validation = CrossValidation::LeaveSpanOut;
+  o.cv_fold_u = {0.0, 0.1, 0.37, 0.5, 0.81, 1.0};
+  o.cv_fold_v = {0.0, 0.25, 0.62, 1.0};
+  const PenalizedFitResult folded = fit_penalized(s, points, params, {}, o);
+  ASSERT_TRUE(folded.ok());
+  // The pieces: the net's spans cut by the fold lines.
+  auto merged = [](std::vector<double> a, const std::vector<double>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+    return a;
+  };
+  const std::vector<double> pu = merged(s.U().breakpoints(), o.cv_fold_u);
+  const std::vector<double> pv = merged(s.V().breakpoints(), o.cv_fold_v);
+  std::vector<std::size_t> piece(points.size());
+  for (std::size_t k = 0; k < points.size(); ++k) piece[k] = span_at(pu, pv, params[k].u, params[k].v);
+  PenalizedFitOptions refit = o;
+  refit.cv_fold_u.clear();
+  refit.cv_fold_v.clear();
+  double sum = 0.0;
+  int pieces = 0;
+  for (std::size_t g = 0; g < (pu.size() - 1) * (pv.size() - 1); ++g) {
+    std::vector<double> weights(points.size(), 1.0);
+    bool any = false;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      if (piece[k] != g) continue;
+      weights[k] = 0.0;
+      any = true;
+    }
+    if (!any) continue;
+    ++pieces;
+    const PenalizedFitResult without = fit_penalized(s, points, params, weights, refit);
+    ASSERT_TRUE(without.ok());
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      if (piece[k] == g) sum += (nurbs::evaluate(without.surface, params[k].u, params[k].v) - points[k]).squaredNorm();
+    }
+  }
+  const double by_refits = sum / static_cast<double>(points.size());
+  std::printf("%d pieces: leave-piece-out %.6g um^2 from the fit, %.6g um^2 by refits\n", pieces, folded.cv_score * 1e6,
+              by_refits * 1e6);
+  EXPECT_GT(pieces, 42);  // the net has 7 × 6 spans, each holding points; the fold lines cut them further
+  EXPECT_NEAR(folded.cv_score, by_refits, 1e-6 * by_refits);
+  // And with no fold lines the score is the spans' own, which the pieces, smaller, predict better than.
+  const PenalizedFitResult own = fit_penalized(s, points, params, {}, refit);
+  ASSERT_TRUE(own.ok());
+  EXPECT_GT(own.cv_score, folded.cv_score);
 }
 
 }  // namespace

@@ -59,6 +59,11 @@ struct PenalizedFitOptions {
   // ε relative to the mean diagonal of AᵀWA: far below any data's weight on a control point.
   double ridge = 1e-9;
   CrossValidation cross_validation = CrossValidation::LeaveOneOut;
+  // Leave-span-out's groups cut also by these breakpoints (both given, each covering the domain): two fits on
+  // different nets are scored on the same groups when each is cut by the other's breakpoints (every span of the
+  // union of both nets' breakpoints then lies in one span of each), so that their scores compare. Empty: the
+  // net's own spans.
+  std::vector<double> cv_fold_u{}, cv_fold_v{};
   // With leave-span-out: of the λ whose score is within one standard error of the best's, the largest (see
   // fit_penalized). For noisy data only: on exact data the spans' terms differ by the fit's misfit, not by noise,
   // and the rule would smooth away what the data show (shape suite S13 at 3 000 points: std 0.33 -> 1.01 µm).
