@@ -4,7 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -103,11 +102,10 @@ TEST(CrossValidation, OnScanLinesLeavingSpansOutKeepsTheNormalsBetweenTheLines) 
   EXPECT_LT(by_spans, 0.5);
 }
 
-
 // Leave-span-out with fold lines (PenalizedFitOptions::cv_fold_u, cv_fold_v) against its definition: each piece of
 // a span that the fold lines cut is left out, the fit made again without its points at the same absolute λ and θ,
-// and its points predicted; the score is their mean squared prediction error. Fold lines through every span's
-// middle and a few elsewhere, 600 noisy points on a bent plate.
+// and its points predicted; the score is their mean squared prediction error. Fold lines at a few places that are
+// not knots (so they cut spans), 600 noisy points on a bent plate.
 TEST(CrossValidation, LeavingOutAPieceOfASpanIsRefittingWithoutIt) {
   const Surface s = nurbs::make_plane_patch(Point3(0, 0, 0), Vector3(30, 0, 0), Vector3(0, 20, 0), 3, 3, 7, 6);
   std::mt19937_64 rng(11);
@@ -130,14 +128,8 @@ TEST(CrossValidation, LeavingOutAPieceOfASpanIsRefittingWithoutIt) {
   const PenalizedFitResult folded = fit_penalized(s, points, params, {}, o);
   ASSERT_TRUE(folded.ok());
   // The pieces: the net's spans cut by the fold lines.
-  auto merged = [](std::vector<double> a, const std::vector<double>& b) {
-    a.insert(a.end(), b.begin(), b.end());
-    std::sort(a.begin(), a.end());
-    a.erase(std::unique(a.begin(), a.end()), a.end());
-    return a;
-  };
-  const std::vector<double> pu = merged(s.U().breakpoints(), o.cv_fold_u);
-  const std::vector<double> pv = merged(s.V().breakpoints(), o.cv_fold_v);
+  const std::vector<double> pu = merged_breakpoints(s.U().breakpoints(), o.cv_fold_u);
+  const std::vector<double> pv = merged_breakpoints(s.V().breakpoints(), o.cv_fold_v);
   std::vector<std::size_t> piece(points.size());
   for (std::size_t k = 0; k < points.size(); ++k) piece[k] = span_at(pu, pv, params[k].u, params[k].v);
   PenalizedFitOptions refit = o;

@@ -43,6 +43,15 @@ namespace probecomp::fitting {
   return breaks;
 }
 
+// The union of two sets of breakpoints, sorted, each value once: the spans of two nets cut by each other's lines
+// (each span of the union lies in one span of either; see PenalizedFitOptions::cv_fold_u).
+[[nodiscard]] inline std::vector<double> merged_breakpoints(std::vector<double> a, const std::vector<double>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  std::sort(a.begin(), a.end());
+  a.erase(std::unique(a.begin(), a.end()), a.end());
+  return a;
+}
+
 // `per_span` parameters in each knot span, at its start and in equal steps, and the domain's end.
 [[nodiscard]] inline std::vector<double> span_parameters(const std::vector<double>& breaks, int per_span) {
   std::vector<double> t;
