@@ -2,7 +2,7 @@
 //   probecomp_shape_suite [--sigma S] [--case NAME[,NAME…]] [--draw N [--first SEED]] [--no-reference]
 //                         [--plain-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D]
 //                         [--no-local-refinement] [--levels L] [--min-cover C] [--dense-start K]
-//                         [--roughness-penalty]
+//                         [--roughness-penalty] [--isotropic-scan-lines]
 // Each case of simulation::shape_suite() (or N cases drawn at random from its families, seeds FIRST, FIRST+1, …)
 // is simulated, compensated by the CAD method and scored against the actual part: std, mean and largest error
 // (µm, ok rows), the rows flagged, ±2u coverage overall and in the worst of 6 × 6 regions, the fitted centre
@@ -14,7 +14,8 @@
 // fits each case again with every fit's cross-validated λ moved by ±0.25, 0.5 and 1 decade, and prints the std at
 // each: whether cross-validation over- or under-smooths there (the suite knows the truth; the product does not).
 // --seeds N runs each case N times, the noise drawn again each time on the same points (ShapeCase::noise_draw),
-// and prints per case the spread of the figures over the draws, each region's coverage averaged over them (what
+// and prints per case the spread of the figures over the draws, the error split into bias and scatter against u
+// (rms over the rows), each region's coverage averaged over them (what
 // u promises a region on average), and the worst region's coverage had each point's u been its true rms error
 // (over the draws): about what a u without fault would reach in the worst region of one draw. --noise-draw D
 // runs draw D of each case's noise instead of its own (0). --no-local-refinement fits with
@@ -22,7 +23,8 @@
 // locally to THB level L (AdaptiveFitOptions::local_refinement_levels), --min-cover C sets
 // AdaptiveFitOptions::local_refinement_min_cover, --dense-start K AdaptiveFitOptions::dense_start_points_per_control_point
 // (0: the fit from the start's knots only); --roughness-penalty sets AdaptiveFitOptions::spatial_penalty to Roughness
-// (the compensation's default is Balance).
+// (the compensation's default is Balance); --isotropic-scan-lines turns off
+// compensation::FitOptions::anisotropy_on_scan_lines.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -106,6 +108,8 @@ int main(int argc, char** argv) {
       seeds = std::atoi(next().c_str());
     } else if (arg == "--no-local-refinement") {
       options.fit.surface.local_refinement = false;
+    } else if (arg == "--isotropic-scan-lines") {
+      options.fit.anisotropy_on_scan_lines = false;
     } else if (arg == "--roughness-penalty") {
       options.fit.surface.spatial_penalty = fitting::AdaptiveFitOptions::SpatialPenalty::Roughness;
     } else if (arg == "--dense-start") {
@@ -117,7 +121,7 @@ int main(int argc, char** argv) {
     } else if (arg == "--noise-draw") {
       noise_draw = std::strtoull(next().c_str(), nullptr, 10);
     } else {
-      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D] [--no-local-refinement] [--levels L] [--min-cover C] [--dense-start K] [--roughness-penalty]\n",
+      std::fprintf(stderr, "usage: %s [--sigma S] [--case NAME,...] [--draw N [--first SEED]] [--no-reference] [--regions] [--stops] [--oracle] [--seeds N] [--noise-draw D] [--no-local-refinement] [--levels L] [--min-cover C] [--dense-start K] [--roughness-penalty] [--isotropic-scan-lines]\n",
                    argv[0]);
       return 2;
     }
@@ -135,8 +139,8 @@ int main(int argc, char** argv) {
   }
   if (seeds > 0) {
     std::printf("%d draws of the noise per case: median and worst over the draws\n", seeds);
-    std::printf("%-22s %5s | %13s | %11s | %11s | %11s | %s\n", "case", "sigma", "std", "cov2u", "worst region",
-                "oracle's", "lowest region mean");
+    std::printf("%-22s %5s | %13s | %11s | %11s | %11s | %6s | %s\n", "case", "sigma", "std", "cov2u", "worst region",
+                "oracle's", "lowest", "error's bias, scatter; u (rms um)");
     std::vector<double> std_medians, worst_medians, oracle_medians, region_means;
     for (simulation::ShapeCase c : cases) {
       if (sigma >= 0.0) c.noise_sigma = sigma;
@@ -147,10 +151,10 @@ int main(int argc, char** argv) {
       };
       const auto stds = scaled(r.stds, 1e3), coverages = scaled(r.coverages, 100.0);
       const auto worsts = scaled(r.worst_regions, 100.0), oracles = scaled(r.oracle_worst_regions, 100.0);
-      std::printf("%-22s %5.1f | %6.3f %6.3f | %5.1f %5.1f | %5.1f %5.1f | %5.1f %5.1f | %5.1f\n", c.name.c_str(),
-                  c.noise_sigma * 1e3, median(stds), worst(stds, true), median(coverages), worst(coverages, false),
-                  median(worsts), worst(worsts, false), median(oracles), worst(oracles, false),
-                  100.0 * r.lowest_region_mean);
+      std::printf("%-22s %5.1f | %6.3f %6.3f | %5.1f %5.1f | %5.1f %5.1f | %5.1f %5.1f | %6.1f | %.3f, %.3f; %.3f\n",
+                  c.name.c_str(), c.noise_sigma * 1e3, median(stds), worst(stds, true), median(coverages),
+                  worst(coverages, false), median(worsts), worst(worsts, false), median(oracles), worst(oracles, false),
+                  100.0 * r.lowest_region_mean, r.bias_rms * 1e3, r.scatter_rms * 1e3, r.u_rms * 1e3);
       std::fflush(stdout);
       std_medians.push_back(median(stds));
       worst_medians.push_back(median(worsts));

@@ -170,4 +170,32 @@ ScanLineDoubts scan_line_doubts(const nurbs::Surface& fit, const nurbs::Surface&
   return out;
 }
 
+std::vector<int> scan_line_numbers(std::span<const Point3> centres, int min_lines) {
+  // A step between lines is the lines' spacing, millimetres; along them a scanning probe's points are tenths of a
+  // millimetre apart: any factor between the two tells them apart.
+  constexpr double kLineBreakSteps = 5.0;
+  constexpr std::size_t kMinLinePoints = 10;
+  const std::size_t n = centres.size();
+  if (n < 2 * kMinLinePoints) return {};
+  std::vector<double> step(n - 1);
+  for (std::size_t k = 0; k + 1 < n; ++k) step[k] = (centres[k + 1] - centres[k]).norm();
+  std::vector<double> sorted = step;
+  const double typical = geometry::median_in_place(sorted);
+  if (!(typical > 0.0)) return {};
+  std::vector<int> out(n, 0);
+  std::vector<double> lengths;
+  int line = 0;
+  std::size_t begun = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    out[k] = line;
+    if (k + 1 == n || step[k] > kLineBreakSteps * typical) {
+      lengths.push_back(static_cast<double>(k + 1 - begun));
+      begun = k + 1;
+      ++line;
+    }
+  }
+  if (line < min_lines || geometry::median_in_place(lengths) < static_cast<double>(kMinLinePoints)) return {};
+  return out;
+}
+
 }  // namespace probecomp::compensation::detail

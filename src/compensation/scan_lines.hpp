@@ -45,4 +45,9 @@ struct ScanLineDoubts {
                                               std::span<const double> residuals, std::span<const double> weights,
                                               double sigma, double line_variance_ratio);
 
+// Points along scan lines, in the order measured, numbered by line (0, 1, …): a line ends where the step to the
+// next point is over kLineBreakSteps times the median step. Empty where that gives fewer than `min_lines` lines or
+// does not follow lines (their median length under kMinLinePoints points: points listed in another order).
+[[nodiscard]] std::vector<int> scan_line_numbers(std::span<const Point3> centres, int min_lines);
+
 }  // namespace probecomp::compensation::detail

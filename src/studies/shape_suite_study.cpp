@@ -110,6 +110,7 @@ ShapeCaseResult run_shape_case(const simulation::ShapeCase& c, const compensatio
 ReplicatedShapeCase replicate_shape_case(simulation::ShapeCase c, int draws, const compensation::CompensateOptions& options) {
   ReplicatedShapeCase out;
   std::vector<std::vector<double>> error;  // per draw, per row (NaN where not ok)
+  std::vector<std::vector<double>> u;      // per draw, per row
   std::vector<int> region;
   RegionShares sum{};
   std::array<int, std::tuple_size_v<RegionShares>> scored{};
@@ -126,6 +127,34 @@ ReplicatedShapeCase replicate_shape_case(simulation::ShapeCase c, int draws, con
     }
     region = std::move(s.region);
     error.push_back(std::move(s.cad_error));
+    std::vector<double>& ud = u.emplace_back();
+    for (const compensation::CompensatedPoint& p : s.cad.points) ud.push_back(p.uncertainty);
+  }
+  {
+    double bias2 = 0.0, scatter2 = 0.0, u2 = 0.0;
+    std::size_t rows = 0;
+    for (std::size_t k = 0; k < region.size(); ++k) {
+      double sum_e = 0.0, sum_e2 = 0.0, sum_u2 = 0.0;
+      bool every = draws > 1;
+      for (std::size_t d = 0; d < error.size() && every; ++d) {
+        every = std::isfinite(error[d][k]);
+        sum_e += error[d][k];
+        sum_e2 += error[d][k] * error[d][k];
+        sum_u2 += u[d][k] * u[d][k];
+      }
+      if (!every) continue;
+      const double mean = sum_e / draws;
+      const double variance = std::max(0.0, (sum_e2 - draws * mean * mean) / (draws - 1));
+      bias2 += std::max(0.0, mean * mean - variance / draws);
+      scatter2 += variance;
+      u2 += sum_u2 / draws;
+      ++rows;
+    }
+    if (rows > 0) {
+      out.bias_rms = std::sqrt(bias2 / rows);
+      out.scatter_rms = std::sqrt(scatter2 / rows);
+      out.u_rms = std::sqrt(u2 / rows);
+    }
   }
   std::vector<double> oracle(region.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t k = 0; k < oracle.size(); ++k) {

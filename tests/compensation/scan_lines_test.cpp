@@ -108,5 +108,30 @@ TEST(ScanLineDoubts, AGridIsNotLines) {
   }
 }
 
+TEST(ScanLineNumbers, EachLineInTurnIsNumbered) {
+  const PlaneLines g(flat(), 9, 2.5);
+  const std::vector<int> numbers = scan_line_numbers(g.points, 8);
+  ASSERT_EQ(numbers.size(), g.points.size());
+  for (std::size_t k = 0; k < g.points.size(); ++k) EXPECT_EQ(numbers[k], g.line[k]) << k;
+  // Lines scanned back and forth: the step between them is still the jump across.
+  std::vector<Point3> zigzag;
+  for (int l = 0; l < 9; ++l) {
+    for (int i = 0; i <= 100; ++i) zigzag.push_back(g.points[static_cast<std::size_t>(l * 101 + (l % 2 ? 100 - i : i))]);
+  }
+  const std::vector<int> back_and_forth = scan_line_numbers(zigzag, 8);
+  ASSERT_EQ(back_and_forth.size(), zigzag.size());
+  for (std::size_t k = 0; k < zigzag.size(); ++k) EXPECT_EQ(back_and_forth[k], static_cast<int>(k / 101)) << k;
+}
+
+TEST(ScanLineNumbers, PointsListedInAnotherOrderOrTooFewLinesAreNotNumbered) {
+  const PlaneLines g(flat(), 9, 2.5);
+  // Every 37th point in turn (37 and 909 share no factor): consecutive points lie on different lines.
+  std::vector<Point3> shuffled;
+  for (std::size_t k = 0; k < g.points.size(); ++k) shuffled.push_back(g.points[(37 * k) % g.points.size()]);
+  EXPECT_TRUE(scan_line_numbers(shuffled, 2).empty());
+  EXPECT_TRUE(scan_line_numbers(PlaneLines(flat(), 5, 4.0).points, 8).empty());
+  EXPECT_EQ(scan_line_numbers(PlaneLines(flat(), 5, 4.0).points, 5).size(), 505u);
+}
+
 }  // namespace
 }  // namespace probecomp::compensation::detail

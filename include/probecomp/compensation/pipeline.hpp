@@ -208,6 +208,10 @@ struct FitOptions {
   // Outliers, decided against the face's fit (compensation/outliers.hpp): flagged, left out of the refit, still
   // compensated on the fit.
   OutlierTest outliers;
+  // On noisy scan lines, also fit with the energy's anisotropy chosen (fitting::PenalizedFitOptions::anisotropic)
+  // and keep that fit where it predicts whole lines left out better than the isotropic one (fit_faces). Off: the
+  // isotropic energy there, as on exact data.
+  bool anisotropy_on_scan_lines = true;
 };
 
 // One face's points and its fit.

@@ -58,6 +58,10 @@ struct ReplicatedShapeCase {
   std::vector<double> oracle_worst_regions;
   // The lowest over regions scored in every draw of the region's coverage averaged over the draws (NaN if none).
   double lowest_region_mean = std::numeric_limits<double>::quiet_NaN();
+  // Over rows ok in every draw (mm): the rms of each row's mean error over the draws, less its scatter's share
+  // (the error's bias), the rms of its standard deviation over the draws (its scatter), and the rms of its u over
+  // the draws. Which part of the error u misses, where it misses.
+  double bias_rms = 0.0, scatter_rms = 0.0, u_rms = 0.0;
 };
 [[nodiscard]] ReplicatedShapeCase replicate_shape_case(simulation::ShapeCase c, int draws,
                                                        const compensation::CompensateOptions& options = {});
