@@ -209,8 +209,8 @@ struct FitOptions {
   // compensated on the fit.
   OutlierTest outliers;
   // On noisy scan lines, also fit with the energy's anisotropy chosen (fitting::PenalizedFitOptions::anisotropic)
-  // and keep that fit where it predicts whole lines left out better than the isotropic one (fit_faces). Off: the
-  // isotropic energy there, as on exact data.
+  // and keep that fit unless it predicts whole lines left out worse than the isotropic one by more than two standard
+  // errors (fit_faces). Off: the isotropic energy there, as on exact data.
   bool anisotropy_on_scan_lines = true;
 };
 
