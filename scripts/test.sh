@@ -24,6 +24,8 @@ if [ "${1:-}" = "--sanitize" ]; then
                                                                         #   (noisy scan lines: the same split rule)
     Pipeline.TwoStyliWithoutNoiseAreExactOnASteepDent                   # Pipeline.TwoStyliOnOneFaceMeetTheBars
     Pipeline.GrossOutliersAtLowAndHighNoise                             # Pipeline.GrossOutliersMoveNoOtherPoint
+    Pipeline.GrossOutliersAtLowAndHighNoiseWithTheBalancedPenalty       #   (its first case: the balance, 1 % moved,
+    Pipeline.TheBalancedFitIsMadeAloneWhereNoGrossErrorCanBe            #   a rough first fit and balanced refits)
     Pipeline.GrossOutliersAreFlaggedAndDoNotSpoilTheirNeighbours        #   (the same)
     Pipeline.NoiseFreeDataWithGrossOutliersStateEveryErrorWithinItsU    #   (the same)
     Pipeline.AFewGrossOutliersAreLeftOutWithoutRegisteringAgain         #   (the same code, and the registration made again)

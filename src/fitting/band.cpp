@@ -73,11 +73,11 @@ std::vector<int> column_ends(const Band& L) {
 // Row i's sums for j > i advance side by side, four k at a time (one pass over the sums for four rows of Z), over
 // contiguous memory: each row k of Z the sums need, both halves (Z_kj, k − b ≤ j ≤ k + b), is kept whole in a ring
 // of b + 1 rows. The terms are grouped by k − i, so that the zeros an envelope skips change no bit.
-[[gnu::always_inline]] inline std::vector<double> inverse_rows(const Band& L) {
+[[gnu::always_inline]] inline BandValues inverse_rows(const Band& L) {
   const int n = L.n, b = L.b;
   const std::size_t stride = static_cast<std::size_t>(b) + 1;
   const std::size_t full = 2 * static_cast<std::size_t>(b) + 1;
-  std::vector<double> z(static_cast<std::size_t>(n) * stride, 0.0);
+  BandValues z(static_cast<std::size_t>(n) * stride, 0.0);
   // Z_kj at ring_row(k)[j − k + b], k − b ≤ j ≤ k + b, for the b + 1 rows k below and at i.
   std::vector<double> ring(stride * full, 0.0);
   auto ring_row = [&](int k) { return &ring[static_cast<std::size_t>(k % (b + 1)) * full]; };
@@ -124,7 +124,7 @@ std::vector<int> column_ends(const Band& L) {
 // -ffp-contract=off, and no FMA in the target), so the results are the same bit for bit; tests compare the two.
 #if PROBECOMP_HAVE_AVX_PATH
 __attribute__((target("avx"))) bool cholesky_avx(Band& L) { return cholesky_rows(L); }
-__attribute__((target("avx"))) std::vector<double> inverse_avx(const Band& L) { return inverse_rows(L); }
+__attribute__((target("avx"))) BandValues inverse_avx(const Band& L) { return inverse_rows(L); }
 bool use_avx() { return geometry::cpu_has_avx() && avx_band_kernels.load(std::memory_order_relaxed); }
 #endif
 
@@ -137,7 +137,7 @@ bool cholesky(Band& L) {
   return cholesky_rows(L);
 }
 
-std::vector<double> band_inverse(const Band& L) {
+BandValues band_inverse(const Band& L) {
 #if PROBECOMP_HAVE_AVX_PATH
   if (use_avx()) return inverse_avx(L);
 #endif

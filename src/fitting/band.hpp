@@ -5,12 +5,34 @@
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <span>
 #include <vector>
+
+#include <tbb/scalable_allocator.h>
 
 #include "probecomp/geometry/types.hpp"
 #include "probecomp/nurbs/knot_vector.hpp"
 
 namespace probecomp::fitting::detail {
+
+// Storage of a band and of its inverse's band: megabytes each on a refined face, allocated afresh by every trial λ
+// (penalized.cpp keeps each trial's factor and inverse). From the system allocator they were mapped and unmapped
+// each time, and the page faults and zeroing of new pages took about a fifth of a fit with outliers (perf on
+// Pipeline.TheBalancedFitIsMadeAloneWhereNoGrossErrorCanBe: 30.7 s, 25.8 s with oneTBB's scalable allocator
+// preloaded); oneTBB's scalable allocator keeps freed blocks for the next trial. AddressSanitizer sees overflows only
+// in its own allocator's blocks, so the sanitizer build keeps the standard one.
+#if defined(__SANITIZE_ADDRESS__)
+#define PROBECOMP_BAND_STANDARD_ALLOCATOR 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define PROBECOMP_BAND_STANDARD_ALLOCATOR 1
+#endif
+#endif
+#ifdef PROBECOMP_BAND_STANDARD_ALLOCATOR
+using BandValues = std::vector<double>;
+#else
+using BandValues = std::vector<double, tbb::scalable_allocator<double>>;
+#endif
 
 // Control point (i, j) → unknown I, the shorter direction inner so that the band is narrow: every pair of control
 // points under one basis row (|Δi| ≤ p, |Δj| ≤ q) is then within b = p·nv + q (or q·nu + p) of each other.
@@ -31,7 +53,7 @@ struct Ordering {
 // (docs/performance.md). The same numbers as without it, bit for bit; band_inverse then leaves Z zero outside.
 struct Band {
   int n = 0, b = 0;
-  std::vector<double> a;
+  BandValues a;
   std::vector<int> first;
   Band() = default;
   Band(int n_, int b_) : n(n_), b(b_), a(static_cast<std::size_t>(n_) * static_cast<std::size_t>(b_ + 1), 0.0) {}
@@ -59,12 +81,12 @@ bool cholesky(Band& L);
 void solve(const Band& L, std::vector<double>& r);
 // The entries of (L·Lᵀ)⁻¹ inside the band (inside L's envelope where it has one: zero elsewhere), upper half by
 // rows: Z(i, j), i ≤ j ≤ i + b, at z[i·(b+1) + j − i].
-std::vector<double> band_inverse(const Band& L);
+BandValues band_inverse(const Band& L);
 
 // rᵀ·Z·r over the unknowns idx[0..m) (all within the band of each other), Z in band_inverse's layout, in two steps
 // for runs of points under one basis row: Z's entries there gathered once into a dense symmetric block
 // (block[a·m + c], both triangles), then each point's form from it: a basis row's variance factor, or its leverage.
-inline void gather_block(const std::vector<double>& Z, int b, const int* idx, int m, double* block) {
+inline void gather_block(std::span<const double> Z, int b, const int* idx, int m, double* block) {
   for (int a = 0; a < m; ++a) {
     for (int c = a; c < m; ++c) {
       const int I = std::min(idx[a], idx[c]), J = std::max(idx[a], idx[c]);

@@ -99,7 +99,7 @@ namespace {
 // block_quadratic_form (timings in docs/performance.md).
 template <int M>
 double leave_one_out_terms(const CvRows& rows, std::size_t first, std::size_t last, const std::vector<double>& D,
-                           const std::vector<double>& Z, int b) {
+                           std::span<const double> Z, int b) {
   const int m = rows.m;
   const std::size_t mm = static_cast<std::size_t>(m);
   Eigen::Matrix<double, M, M> block(m, m);  // Z over the span's unknowns (gather_block)
@@ -131,7 +131,7 @@ double leave_one_out_terms(const CvRows& rows, std::size_t first, std::size_t la
 // leverage. Unlike GCV, which replaces each h_k by their mean, it sees a point that alone holds a control point
 // (h_k near 1): with scattered points on a fine basis that is where an almost unpenalised fit swings between
 // the points, and GCV, blind to it, would choose such a fit for exact data.
-double leave_one_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b) {
+double leave_one_out(const CvRows& rows, const std::vector<double>& D, std::span<const double> Z, int b) {
   const std::size_t n_rows = rows.y.size();
   // Fixed blocks summed in order: the same sum for any thread count; small enough that 10 000 rows share out over two
   // cores (10 blocks, not 3).
@@ -158,7 +158,7 @@ namespace {
 // cross-validation: Arlot and Celisse, "A survey of cross-validation procedures for model selection", 2010).
 template <int M>
 double leave_span_out_terms(const CvRows& rows, const std::vector<std::size_t>& starts, std::size_t first,
-                            std::size_t last, const std::vector<double>& D, const std::vector<double>& Z, int b,
+                            std::size_t last, const std::vector<double>& D, std::span<const double> Z, int b,
                             double* span_terms) {
   const std::size_t mm = static_cast<std::size_t>(rows.m);
   using Square = Eigen::Matrix<double, M, M>;
@@ -207,7 +207,7 @@ double leave_span_out_terms(const CvRows& rows, const std::vector<std::size_t>& 
 // nothing but the smoothing holds the fit, the fit swings (shape suite, lines 4 mm apart, σ = 3 µm: contacts up to
 // 0.29 mm off). A span's points left out together must be predicted from other lines, as the fit between the lines
 // is.
-double leave_span_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b,
+double leave_span_out(const CvRows& rows, const std::vector<double>& D, std::span<const double> Z, int b,
                       std::vector<double>* span_terms) {
   const std::vector<std::size_t>& starts = rows.span_starts;
   const std::size_t spans = starts.size() - 1;

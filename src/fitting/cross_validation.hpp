@@ -51,9 +51,9 @@ struct CvRows {
 
 // Σ w_k |r_k|² / (1 − h_k)² over the rows (leave_one_out) or each point's residual with its whole knot span left
 // out (leave_span_out), D the trial's displacement (n × 3) and Z its band of the inverse (band_inverse, half-bandwidth b).
-[[nodiscard]] double leave_one_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b);
+[[nodiscard]] double leave_one_out(const CvRows& rows, const std::vector<double>& D, std::span<const double> Z, int b);
 // leave_span_out also gives each span's own term (in span order) in `span_terms` when asked.
-[[nodiscard]] double leave_span_out(const CvRows& rows, const std::vector<double>& D, const std::vector<double>& Z, int b,
+[[nodiscard]] double leave_span_out(const CvRows& rows, const std::vector<double>& D, std::span<const double> Z, int b,
                                     std::vector<double>* span_terms = nullptr);
 
 }  // namespace probecomp::fitting::detail

@@ -140,7 +140,7 @@ struct Trial {
   double log10_smoothing = 0.0, lambda = 0.0;
   double log10_anisotropy = 0.0;
   double rss = 0.0, trace = 0.0, cv_score = std::numeric_limits<double>::infinity();
-  std::vector<double> Z;  // the band of the inverse (for tr H, the leverages and the variance factors)
+  detail::BandValues Z;  // the band of the inverse (for tr H, the leverages and the variance factors)
   Band L;                 // the Cholesky factor of AᵀWA + λG + εI (for the smoothing bias)
   std::vector<double> D;  // n × 3
   std::vector<double> cv_terms;  // leave-span-out: each span's term of the score (unscaled), in span order
@@ -215,7 +215,7 @@ Trial evaluate(const DataTerms& data, const Band& G, double scale_ratio, double 
     }
   }
   t.rss = std::max(data.yWy - 2.0 * cross + quad, 0.0);
-  std::vector<double> Z = band_inverse(N);
+  detail::BandValues Z = band_inverse(N);
   double trace = 0.0;
   for (int I = 0; I < n; ++I) {
     for (int J = data.AtWA.row_start(I); J <= I; ++J) {
@@ -469,7 +469,7 @@ PenalizedFitResult fit_on(const Surface& start, const HierarchicalBasis* thb, st
     result.status = PenalizedFitResult::Status::NumericalError;
     return result;
   }
-  const std::vector<double>& Z = best.Z;
+  const detail::BandValues& Z = best.Z;
 
   // The displacement of start's control net, in `order` (a hierarchical basis's mapped through its coefficients).
   std::vector<double> expanded;

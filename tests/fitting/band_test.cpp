@@ -73,7 +73,7 @@ void expect_matches_dense(int n, int b, bool with_envelope, unsigned seed) {
   const Eigen::MatrixX3d expected = llt.solve(rhs);
   for (int I = 0; I < n; ++I)
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(x[3 * static_cast<std::size_t>(I) + k], expected(I, k), 1e-12);
-  const std::vector<double> Z = band_inverse(L);
+  const BandValues Z = band_inverse(L);
   for (int i = 0; i < n; ++i) {
     for (int j = i; j <= std::min(n - 1, i + b); ++j) {
       const double z = Z[static_cast<std::size_t>(i) * (b + 1) + (j - i)];
@@ -104,7 +104,7 @@ TEST(BandAlgebra, AnEnvelopeChangesNoBitOfTheFactorOrTheInverseInsideIt) {
   without.first.clear();
   ASSERT_TRUE(cholesky(with));
   ASSERT_TRUE(cholesky(without));
-  const std::vector<double> Zw = band_inverse(with), Zo = band_inverse(without);
+  const BandValues Zw = band_inverse(with), Zo = band_inverse(without);
   for (int i = 0; i < 200; ++i) {
     for (int J = with.row_start(i); J <= i; ++J) EXPECT_EQ(with.at(i, J), without.at(i, J));
     for (int j = i; j <= std::min(199, i + 30); ++j) {
@@ -126,10 +126,10 @@ TEST(BandAlgebra, TheAvxAndPortableKernelsGiveTheSameBits) {
     Band fast = c.band, portable = c.band;
     avx_band_kernels = true;
     ASSERT_TRUE(cholesky(fast));
-    const std::vector<double> Zf = band_inverse(fast);
+    const BandValues Zf = band_inverse(fast);
     avx_band_kernels = false;
     ASSERT_TRUE(cholesky(portable));
-    const std::vector<double> Zp = band_inverse(portable);
+    const BandValues Zp = band_inverse(portable);
     int differ = 0;
     for (std::size_t k = 0; k < fast.a.size(); ++k) differ += fast.a[k] != portable.a[k];
     for (std::size_t k = 0; k < Zf.size(); ++k) differ += Zf[k] != Zp[k];
