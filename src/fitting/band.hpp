@@ -16,11 +16,10 @@
 namespace probecomp::fitting::detail {
 
 // Storage of a band and of its inverse's band: megabytes each on a refined face, allocated afresh by every trial λ
-// (penalized.cpp keeps each trial's factor and inverse). From the system allocator they were mapped and unmapped
-// each time, and the page faults and zeroing of new pages took about a fifth of a fit with outliers (perf on
-// Pipeline.TheBalancedFitIsMadeAloneWhereNoGrossErrorCanBe: 30.7 s, 25.8 s with oneTBB's scalable allocator
-// preloaded); oneTBB's scalable allocator keeps freed blocks for the next trial. AddressSanitizer sees overflows only
-// in its own allocator's blocks, so the sanitizer build keeps the standard one.
+// (penalized.cpp keeps each trial's factor and inverse). The system allocator mapped and unmapped them each time, and
+// the page faults and zeroing of new pages took about a fifth of a fit with outliers; oneTBB's scalable allocator
+// keeps freed blocks for the next trial (timings in docs/performance.md, "CI's time"). AddressSanitizer sees
+// overflows only in its own allocator's blocks, so the sanitizer build keeps the standard one.
 #if defined(__SANITIZE_ADDRESS__)
 #define PROBECOMP_BAND_STANDARD_ALLOCATOR 1
 #elif defined(__has_feature)
