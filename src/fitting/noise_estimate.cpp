@@ -28,6 +28,9 @@ constexpr double kMinConditionReciprocal = 1e-8;
 // gross error (on Gaussian noise 1 point in 16 000 is beyond 4 σ; and the first estimate reads high when there
 // are gross errors).
 constexpr double kGrossErrorSigmas = 4.0;
+// Screens for gross errors standing out alone (screen_for_gross_errors): a cluster of k errors among each other's
+// neighbours is peeled in up to k passes.
+constexpr int kScreenPasses = 8;
 
 struct Prediction {
   bool ok = false;
@@ -151,6 +154,25 @@ std::size_t LocalPredictionNoise::standing_out(std::span<const double> residuals
   return static_cast<std::size_t>(std::count_if(e.begin(), e.end(), [&](double x) { return !(x <= bound); }));
 }
 
+std::vector<char> LocalPredictionNoise::isolated_errors(std::span<const double> residuals, double sigmas,
+                                                        double floor) const {
+  constexpr auto K = static_cast<std::size_t>(kNeighbours);
+  std::vector<char> out(residuals.size(), 0);
+  if (tested_.empty()) return out;
+  const std::vector<double> e = prediction_errors(residuals);
+  const double bound = std::max(sigmas * sigma_of(e, residuals.size()), floor);
+  // (An untested neighbour's error is taken as zero: it cannot be compared.)
+  std::vector<double> at_point(residuals.size(), 0.0);
+  for (std::size_t i = 0; i < tested_.size(); ++i) at_point[tested_[i]] = e[i];
+  for (std::size_t i = 0; i < tested_.size(); ++i) {
+    if (e[i] <= bound) continue;
+    bool largest = true;
+    for (std::size_t j = 0; j < K && largest; ++j) largest = e[i] >= at_point[neighbour_[i * K + j]];
+    out[tested_[i]] = largest;
+  }
+  return out;
+}
+
 double LocalPredictionNoise::sigma(std::span<const double> residuals) const {
   if (tested_.empty()) return std::numeric_limits<double>::infinity();
   return sigma_of(prediction_errors(residuals), residuals.size());
@@ -194,6 +216,40 @@ bool may_hold_gross_errors(const LocalPredictionNoise& local, const nurbs::Surfa
                            std::span<const SurfaceParameter> params, double sigmas, double floor) {
   if (local.tested() < points.size()) return true;
   return local.standing_out(detail::along_normal(s, points, params, {}).residual, sigmas, floor) > 0;
+}
+
+std::vector<char> peel_isolated_errors(const LocalPredictionNoise& local, std::span<const Point3> points,
+                                       std::span<const double> residuals, double sigmas, double floor) {
+  // Two gross errors among each other's neighbours spoil each other's prediction: only the larger stands out
+  // alone. Screened again without the points found, until none is found (or kScreenPasses).
+  std::vector<char> out(points.size(), 0);
+  std::vector<double> weights(points.size(), 1.0);
+  for (int pass = 0; pass < kScreenPasses; ++pass) {
+    const std::vector<char> found = pass == 0 ? local.isolated_errors(residuals, sigmas, floor)
+                                              : LocalPredictionNoise(points, weights, points.size())
+                                                    .isolated_errors(residuals, sigmas, floor);
+    bool more = false;
+    for (std::size_t k = 0; k < found.size(); ++k) {
+      if (!found[k] || out[k]) continue;
+      out[k] = 1;
+      weights[k] = 0.0;
+      more = true;
+    }
+    if (!more) break;
+  }
+  return out;
+}
+
+GrossErrorScreen screen_for_gross_errors(const LocalPredictionNoise& local, const nurbs::Surface& s,
+                                         std::span<const Point3> points, std::span<const SurfaceParameter> params,
+                                         double sigmas, double floor, double peel_floor) {
+  GrossErrorScreen out;
+  const std::vector<double> residual = detail::along_normal(s, points, params, {}).residual;
+  out.may_hold = local.tested() < points.size() || local.standing_out(residual, sigmas, floor) > 0;
+  if (!out.may_hold) return out;
+  out.isolated = peel_isolated_errors(local, points, residual, sigmas, std::max(floor, peel_floor));
+  if (std::find(out.isolated.begin(), out.isolated.end(), 1) == out.isolated.end()) out.isolated.clear();
+  return out;
 }
 
 }  // namespace probecomp::fitting

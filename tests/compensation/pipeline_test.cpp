@@ -692,7 +692,10 @@ TEST(Pipeline, UnfollowedShapeAtLowNoiseIsNotPeeledOff) {
 // off with a u of 0.1 µm. Next to points left out, u now holds r(1 − cos θ) for the angle θ between the fit's normal
 // and what the centres around the point show (compensation/normal_support.hpp), and a point the last fit did not use
 // holds its residual (a prediction error). Measured: 1.93, 2.34, 2.51 u (60 × 30) and 1.28, 1.39, 0.99 u (120 × 60);
-// 17.2 u, and 814 and 4 358 u, before.
+// 17.2 u, and 814 and 4 358 u, before. Since the first fit is made without the points that stand out alone from
+// their neighbours by more than 0.05 mm (compensation/face_fits.cpp, kPeelFloor), on the 120 × 60 grid it pushes no
+// good point out and nothing swings: 0.17–0.18 µm, no point flagged but the moved ones, no warning; on the 60 × 30
+// grid 9–12 good points are still left out next to them, the normals there 8–11° off, told, at 1.77–1.89 u.
 TEST(Pipeline, NoiseFreeDataWithGrossOutliersStateEveryErrorWithinItsU) {
   for (const int nu : test::cases({60, 120})) {
     const PaperPanel panel(nu, nu / 2);
@@ -707,8 +710,11 @@ TEST(Pipeline, NoiseFreeDataWithGrossOutliersStateEveryErrorWithinItsU) {
         return w.find("the fitted normal is up to") != std::string::npos;
       });
       if (said != r.warnings.end()) std::printf("  %s\n", said->c_str());
-      if (nu == 120 && seed != 3) {
+      if (nu == 60) {
         EXPECT_NE(said, r.warnings.end());
+      } else {
+        EXPECT_EQ(t.good_flagged, 0);
+        EXPECT_LE(t.worst, 0.001);
       }
       std::printf("%d x %d seed %d: worst error %.2f um (%.2f u); %d good points flagged, %d moved missed\n", nu,
                   nu / 2, static_cast<int>(seed), t.worst * 1e3, t.worst_in_u, t.good_flagged, t.moved_missed);

@@ -45,6 +45,11 @@ class LocalPredictionNoise {
   // (mm): a gross error's mark whatever the smooth shape around it (a local quadratic follows that). A sharp feature
   // the quadratic cannot follow (a crease between the neighbours) is counted too.
   [[nodiscard]] std::size_t standing_out(std::span<const double> residuals, double sigmas, double floor) const;
+  // Per point (as many as `residuals`), 1 where a tested point stands out as above and its prediction error is also
+  // the largest of its neighbourhood's: an isolated error (a gross error spoils its neighbours' predictions by less
+  // than its own; a feature the quadratic cannot follow raises several neighbouring errors alike, and only its
+  // local peaks are marked).
+  [[nodiscard]] std::vector<char> isolated_errors(std::span<const double> residuals, double sigmas, double floor) const;
 
  private:
   // Each tested point's prediction error |e_k| / √(1 + a_k), in the order of tested_.
@@ -68,5 +73,22 @@ class LocalPredictionNoise {
 [[nodiscard]] bool may_hold_gross_errors(const LocalPredictionNoise& local, const nurbs::Surface& s,
                                          std::span<const Point3> points, std::span<const SurfaceParameter> params,
                                          double sigmas, double floor);
+
+// The points whose residuals stand out alone (LocalPredictionNoise::isolated_errors), found again among the rest
+// without those found (a cluster of errors among each other's neighbours shows its largest first), up to four
+// passes. `local` is built over `points` with no weights and max_points at least their number.
+[[nodiscard]] std::vector<char> peel_isolated_errors(const LocalPredictionNoise& local, std::span<const Point3> points,
+                                                     std::span<const double> residuals, double sigmas, double floor);
+
+// may_hold_gross_errors's screen (`sigmas`, `floor`), and which points are peeled as isolated errors of distance
+// from `s` beyond `peel_floor` too (mm).
+struct GrossErrorScreen {
+  bool may_hold = false;
+  std::vector<char> isolated;  // per point; empty when none is
+};
+[[nodiscard]] GrossErrorScreen screen_for_gross_errors(const LocalPredictionNoise& local, const nurbs::Surface& s,
+                                                       std::span<const Point3> points,
+                                                       std::span<const SurfaceParameter> params, double sigmas,
+                                                       double floor, double peel_floor);
 
 }  // namespace probecomp::fitting
