@@ -348,7 +348,9 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     // 161 s against 70 s).
     // The gate's LocalPredictionNoise is the one the first fit builds over the same points (every weight 1, and
     // every point below its kMaxPoints): built once for both, unless the screen leaves points out of that fit.
-    const fitting::LocalPredictionNoise gate(pts, std::span<const double>{}, pts.size());
+    // (Without the balance only the screen's peel uses it: a sample of a large face, as the fits' own.)
+    const fitting::LocalPredictionNoise gate(pts, std::span<const double>{},
+                                             balance ? pts.size() : fitting::LocalPredictionNoise::kMaxPoints);
     const fitting::GrossErrorScreen screen = fitting::screen_for_gross_errors(
         gate, start, pts, params, options.outliers.sigmas, options.outliers.min_residual, kPeelFloor);
     const bool balanced_first = balance && !screen.may_hold;

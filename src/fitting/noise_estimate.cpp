@@ -85,7 +85,8 @@ Prediction predict_centre(const Point3& centre, const std::array<Point3, LocalPr
 }  // namespace
 
 LocalPredictionNoise::LocalPredictionNoise(std::span<const Point3> points, std::span<const double> weights,
-                                           std::size_t max_points) {
+                                           std::size_t max_points)
+    : max_points_(max_points) {
   constexpr auto K = static_cast<std::size_t>(kNeighbours);
   auto used = [&](std::size_t k) { return weights.empty() || weights[k] > 0.0; };
   // The points taken part: the used ones, every m-th of them over max_points.
@@ -226,7 +227,7 @@ std::vector<char> peel_isolated_errors(const LocalPredictionNoise& local, std::s
   std::vector<double> weights(points.size(), 1.0);
   for (int pass = 0; pass < kScreenPasses; ++pass) {
     const std::vector<char> found = pass == 0 ? local.isolated_errors(residuals, sigmas, floor)
-                                              : LocalPredictionNoise(points, weights, points.size())
+                                              : LocalPredictionNoise(points, weights, local.max_points())
                                                     .isolated_errors(residuals, sigmas, floor);
     bool more = false;
     for (std::size_t k = 0; k < found.size(); ++k) {

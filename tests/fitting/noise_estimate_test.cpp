@@ -151,7 +151,7 @@ TEST(LocalPredictionNoise, AGrossErrorStandsOutAndSmoothShapeHardlyEver) {
 // Gross errors 0.1–5 mm alone, in pairs and in threes of nearest neighbours (60 clusters over 6 000 points), on
 // the bulge and wave above at σ = 4.5 µm and without noise: every one is peeled (a cluster's smaller errors once
 // its larger ones are out of their neighbours' predictions; on random points clusters fall among each other's
-// neighbours, and four passes left 1–2 per field). Other points are peeled where a gross neighbour weighs more in
+// neighbours: four passes left 1–2 per field, eight none). Other points are peeled where a gross neighbour weighs more in
 // their prediction than in its own (random points, where a quadratic through uneven neighbours extrapolates):
 // 2–7 per field there, none on the grid, one on the scan lines; a fit that leaves them out predicts them and takes
 // them back (compensation/face_fits.cpp).

@@ -41,6 +41,8 @@ class LocalPredictionNoise {
   [[nodiscard]] double neighbour_correlation(std::span<const double> residuals) const;
   // Points tested (those with a well-posed local quadratic).
   [[nodiscard]] std::size_t tested() const { return tested_.size(); }
+  // The max_points it was built with.
+  [[nodiscard]] std::size_t max_points() const { return max_points_; }
   // How many tested points' prediction errors stand out beyond `sigmas` times sigma(residuals) and beyond `floor`
   // (mm): a gross error's mark whatever the smooth shape around it (a local quadratic follows that). A sharp feature
   // the quadratic cannot follow (a crease between the neighbours) is counted too.
@@ -60,6 +62,7 @@ class LocalPredictionNoise {
   std::vector<std::uint32_t> neighbour_;  // kNeighbours per tested point
   std::vector<float> weight_;             // the prediction's weight of each neighbour's residual
   std::vector<float> scale_;              // 1 / √(1 + a_k)
+  std::size_t max_points_ = kMaxPoints;
 };
 
 // Whether any of the points may be a gross error, before any fit: one whose distance from `s` along its normal (at
@@ -75,8 +78,8 @@ class LocalPredictionNoise {
                                          double sigmas, double floor);
 
 // The points whose residuals stand out alone (LocalPredictionNoise::isolated_errors), found again among the rest
-// without those found (a cluster of errors among each other's neighbours shows its largest first), up to four
-// passes. `local` is built over `points` with no weights and max_points at least their number.
+// without those found (a cluster of errors among each other's neighbours shows its largest first), up to eight
+// passes, each over as many points as `local` (built over `points` with no weights) took.
 [[nodiscard]] std::vector<char> peel_isolated_errors(const LocalPredictionNoise& local, std::span<const Point3> points,
                                                      std::span<const double> residuals, double sigmas, double floor);
 
