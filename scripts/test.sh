@@ -30,6 +30,8 @@ if [ "${1:-}" = "--sanitize" ]; then
     Pipeline.NoiseFreeDataWithGrossOutliersStateEveryErrorWithinItsU    #   (the same)
     Pipeline.AFewGrossOutliersAreLeftOutWithoutRegisteringAgain         #   (the same code, and the registration made again)
     Pipeline.UnfollowedShapeAtLowNoiseIsNotPeeledOff                    # Pipeline.NoiseFreeDataAreCompensated...
+    ShapeSuite.OutliersSideBySideAreToldAsPossiblyShape                 # Pipeline.GrossOutliersMoveNoOtherPoint (the
+                                                                        #   warning's code, on outliers apart)
     FitSurface.DataOnHalfThePatchWithTheDentFitThatHalf                 # FitSurface.ADentTheNominalKnotsCannotFollow...
     FitSurface.TheBalancedPenaltyFollowsANarrowDentWithoutRoughnessElsewhere  # FitSurface.ABroadMisfitTheSpan... (the
                                                                         #   balanced penalty), and every Pipeline test

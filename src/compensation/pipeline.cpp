@@ -32,6 +32,7 @@ using detail::check_point_spread;
 using detail::check_points_near;
 using detail::folded_offset_warnings;
 using detail::normal_warnings;
+using detail::outlier_group_warnings;
 using detail::registration_warnings;
 using detail::tip_radii;
 using detail::unfitted_face_warnings;
@@ -421,6 +422,7 @@ CompensationResult compensate_with_radii(const cad::Model& model, std::span<cons
     ++(*run_counts)[static_cast<std::size_t>(c.status)];
   }
   normal_warnings(fits, radii, out.points, out.warnings);
+  outlier_group_warnings(fits, raw, out.points, out.warnings);
   for (FaceFit& ff : fits.faces) {
     FaceReport rep = std::move(ff.report);  // the fits are not needed past this point
     const auto counts = by_face.find(rep.face);

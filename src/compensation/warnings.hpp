@@ -41,4 +41,11 @@ void folded_offset_warnings(const PreparedModel& prepared, const std::vector<Fac
 void normal_warnings(const FitResult& fits, const geometry::TipRadii& radii, std::span<const CompensatedPoint> points,
                      std::vector<std::string>& warnings);
 
+// Faces whose outliers lie side by side (each among another's kGroupNeighbours nearest centres of the face), in
+// groups of kMinGroup (5) or more: gross errors are single readings, seldom each other's neighbours, and such groups are
+// more often shape the fit does not follow (a crease, a feature narrower than the points' spacing), whose readings
+// are right. One warning per such face: how many, the largest group and where (`raw`: the centres, machine frame).
+void outlier_group_warnings(const FitResult& fits, std::span<const Point3> raw, std::span<const CompensatedPoint> points,
+                            std::vector<std::string>& warnings);
+
 }  // namespace probecomp::compensation::detail

@@ -170,6 +170,26 @@ TEST(ShapeSuite, AMisfitThinOverTheFaceIsFollowedNotTakenForNoise) {
   }
 }
 
+// A crease 0.3 mm high over 1 mm on the hood's grid, σ = 1.5 µm (S11): the fit, out of refinement rounds, does not
+// follow its sharpest part, and readings there are left out as outliers although none is a gross error (the
+// simulator makes none): 50 of S11's 7 031 points; on 1 500, 2 500 and 3 500 points at σ = 1.5 and 0.5 µm, 27 to
+// 138 (found, not mended: the refits' local spread is of the points the fit follows). They lie along the crease,
+// side by side, which gross errors seldom do, and the user is told so, with where. Here on 1 500 points (S11 itself
+// takes a minute).
+TEST(ShapeSuite, OutliersSideBySideAreToldAsPossiblyShape) {
+  simulation::ShapeCase c = suite_case("S11");
+  c.points = 1500;
+  const ShapeCaseResult r = run_shape_case(c);
+  int outliers = 0;
+  for (const compensation::CompensatedPoint& p : r.cad.points) outliers += p.status == compensation::PointStatus::Outlier;
+  const auto told = std::find_if(r.cad.warnings.begin(), r.cad.warnings.end(), [](const std::string& w) {
+    return w.find("lie side by side") != std::string::npos;
+  });
+  std::printf("S11: %d outliers; %s\n", outliers, told == r.cad.warnings.end() ? "not told" : told->c_str());
+  ASSERT_GT(outliers, 0);
+  EXPECT_NE(told, r.cad.warnings.end());
+}
+
 // With the balanced penalty (fitting::AdaptiveFitOptions::SpatialPenalty::Balance, the default) the same bulge on the
 // cylinder (draw 207) is fitted on the coarse knots, and the fit misses part of it unseen by any estimate of its own
 // bias: ±2u held 94.7 % overall and 43.4 % in the worst region. The fit from the finer start followed it, and
