@@ -339,7 +339,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
     // Its u is never used when a balanced refit follows (on noisy data off scan lines): no representation check.
     if (balance) first_fit.representation_bias = false;
     // Where no centre stands out from what its neighbours predict for its distance from the registered offset face
-    // (fitting::may_hold_gross_errors, with the outlier test's bound), there is no gross error for the balance to
+    // (fitting::GrossErrorScreen::may_hold, with the outlier test's bound), there is no gross error for the balance to
     // follow, and the first fit is the balanced one: one fit of the face, not two (BM_Compensate10k, whose face is
     // such: 1.7 times the roughness rule's time with two fits, 1.0 with one). Its verdict is made as any first fit's,
     // and the refits without what it leaves out are balanced as above: no point stood out by the test's 5 σ before

@@ -208,17 +208,6 @@ double LocalPredictionNoise::sigma_of(const std::vector<double>& e, std::size_t 
   return work.empty() ? first : geometry::kMadToSigma * geometry::median_in_place(work);
 }
 
-bool may_hold_gross_errors(const nurbs::Surface& s, std::span<const Point3> points,
-                           std::span<const SurfaceParameter> params, double sigmas, double floor) {
-  return may_hold_gross_errors(LocalPredictionNoise(points, {}, points.size()), s, points, params, sigmas, floor);
-}
-
-bool may_hold_gross_errors(const LocalPredictionNoise& local, const nurbs::Surface& s, std::span<const Point3> points,
-                           std::span<const SurfaceParameter> params, double sigmas, double floor) {
-  if (local.tested() < points.size()) return true;
-  return local.standing_out(detail::along_normal(s, points, params, {}).residual, sigmas, floor) > 0;
-}
-
 std::vector<char> peel_isolated_errors(const LocalPredictionNoise& local, std::span<const Point3> points,
                                        std::span<const double> residuals, double sigmas, double floor) {
   // Two gross errors among each other's neighbours spoil each other's prediction: only the larger stands out

@@ -65,29 +65,24 @@ class LocalPredictionNoise {
   std::size_t max_points_ = kMaxPoints;
 };
 
-// Whether any of the points may be a gross error, before any fit: one whose distance from `s` along its normal (at
-// the point's parameters) stands out from what its neighbours predict by more than `sigmas` times their noise and
-// more than `floor` (mm), or one without a neighbourhood to judge it by (every point is tested). The local quadratic
-// follows the smooth deformation from `s`; a feature it cannot follow (a dent's rim, a crease) counts too.
-[[nodiscard]] bool may_hold_gross_errors(const nurbs::Surface& s, std::span<const Point3> points,
-                                         std::span<const SurfaceParameter> params, double sigmas, double floor);
-// The same with the points' LocalPredictionNoise built by the caller over every point (no weights, max_points at
-// least their number), to be used again (fit_surface takes it).
-[[nodiscard]] bool may_hold_gross_errors(const LocalPredictionNoise& local, const nurbs::Surface& s,
-                                         std::span<const Point3> points, std::span<const SurfaceParameter> params,
-                                         double sigmas, double floor);
-
 // The points whose residuals stand out alone (LocalPredictionNoise::isolated_errors), found again among the rest
 // without those found (a cluster of errors among each other's neighbours shows its largest first), up to eight
 // passes, each over as many points as `local` (built over `points` with no weights) took.
 [[nodiscard]] std::vector<char> peel_isolated_errors(const LocalPredictionNoise& local, std::span<const Point3> points,
                                                      std::span<const double> residuals, double sigmas, double floor);
 
-// may_hold_gross_errors's screen (`sigmas`, `floor`), and which points are peeled as isolated errors of distance
-// from `s` beyond `peel_floor` too (mm).
+// A screen for gross errors before any fit, of the points' distances from `s` along its normal (at each point's
+// parameters), with `local` built by the caller over the points (no weights), to be used again (fit_surface takes
+// it). The local quadratic follows the smooth deformation from `s`; a feature it cannot follow (a dent's rim, a
+// crease) stands out too.
 struct GrossErrorScreen {
+  // Whether any point may be a gross error: one that stands out from what its neighbours predict by more than
+  // `sigmas` times their noise and more than `floor` (mm), or one without a neighbourhood to judge it by (every
+  // point is tested).
   bool may_hold = false;
-  std::vector<char> isolated;  // per point; empty when none is
+  // Per point, 1 where it is peeled as an isolated error (peel_isolated_errors) beyond `peel_floor` (mm) too; empty
+  // when none is.
+  std::vector<char> isolated;
 };
 [[nodiscard]] GrossErrorScreen screen_for_gross_errors(const LocalPredictionNoise& local, const nurbs::Surface& s,
                                                        std::span<const Point3> points,
