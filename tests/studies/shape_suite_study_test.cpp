@@ -324,6 +324,28 @@ TEST(ShapeSuite, ScanLinesAreFollowedOnEveryDrawOfTheNoise) {
   }
 }
 
+// A smooth shape the nominal's coarse net cannot follow, scanned along lines (D805: a 275 µm saddle on a cylinder,
+// σ = 4.5 µm): its misfit, a fourth of σ, hid in the residuals' spread, no span stood out, and the fit stayed on the
+// nominal's 20 control points with no penalty at work (contacts 1.13–1.15 µm std on four draws, the reference
+// smoother 0.51 µm). A refinement is now tried where the net is saturated and kept on an F test (fitting/adaptive.cpp):
+// 0.33–0.47 µm on the first three draws. Not on exact data, nor on draws whose nets never saturate (the suite's scan cases print the same).
+TEST(ShapeSuite, ASmoothShapeTheNominalsNetCannotFollowIsFollowedAlongScanLines) {
+  const simulation::ShapeCase drawn = simulation::draw_shape_case(805, 0.0045);
+  ASSERT_EQ(drawn.sampling, simulation::Sampling::ScanLines);
+  for (const std::uint64_t draw : test::kLight ? std::vector<std::uint64_t>{0} : std::vector<std::uint64_t>{0, 1, 2}) {
+    SCOPED_TRACE(draw);
+    simulation::ShapeCase c = drawn;
+    c.noise_draw = draw;
+    const ShapeCaseResult r = run_shape_case(c);
+    std::printf("D805, noise draw %d: std %.2f um, largest %.1f um, fitted centres %.2f um rms, mean u %.2f um, "
+                "coverage %.1f %%\n", static_cast<int>(draw), r.cad_summary.std * 1e3, r.cad_summary.max_abs() * 1e3,
+                r.fit_rms * 1e3, r.mean_uncertainty * 1e3, 100.0 * r.coverage_2u);
+    EXPECT_LT(r.cad_summary.std, 0.0007);
+    EXPECT_LT(r.cad_summary.max_abs(), 0.004);
+    EXPECT_GE(r.coverage_2u, 0.95);
+  }
+}
+
 // On scan lines the energy was kept isotropic, for the ringing an anisotropic one gave between the lines without
 // noise. With noise an anisotropic fit is tried too (compensation/face_fits.cpp): on D409 (a 54 µm wave 13 mm long
 // at 76° across lines on a cylinder) it follows the wave, std 1.234 -> 0.782 µm against the reference smoother's
