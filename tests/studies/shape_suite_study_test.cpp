@@ -327,8 +327,9 @@ TEST(ShapeSuite, ScanLinesAreFollowedOnEveryDrawOfTheNoise) {
 // A smooth shape the nominal's coarse net cannot follow, scanned along lines (D805: a 275 µm saddle on a cylinder,
 // σ = 4.5 µm): its misfit, a fourth of σ, hid in the residuals' spread, no span stood out, and the fit stayed on the
 // nominal's 20 control points with no penalty at work (contacts 1.13–1.15 µm std on four draws, the reference
-// smoother 0.51 µm). A refinement is now tried where the net is saturated and kept on an F test (fitting/adaptive.cpp):
-// 0.33–0.47 µm on the first three draws. Not on exact data, nor on draws whose nets never saturate (the suite's scan cases print the same).
+// smoother 0.51 µm). A refinement is now tried where the net is saturated and kept on an F test
+// (fitting/adaptive.cpp): 0.33–0.47 µm on the first three draws. Not on exact data, nor on faces whose nets never
+// saturate (the suite's scan cases print the same).
 TEST(ShapeSuite, ASmoothShapeTheNominalsNetCannotFollowIsFollowedAlongScanLines) {
   const simulation::ShapeCase drawn = simulation::draw_shape_case(805, 0.0045);
   ASSERT_EQ(drawn.sampling, simulation::Sampling::ScanLines);
