@@ -34,6 +34,16 @@ simulation::ShapeCase suite_case(const std::string& name) {
   return {};
 }
 
+// A case run on one draw of its noise (ShapeCase::noise_draw), its figures printed.
+ShapeCaseResult run_noise_draw(simulation::ShapeCase c, std::uint64_t draw) {
+  c.noise_draw = draw;
+  ShapeCaseResult r = run_shape_case(c);
+  std::printf("%s, noise draw %d: std %.2f um, largest %.1f um, fitted centres %.2f um rms, mean u %.2f um, "
+              "coverage %.1f %%\n", c.name.c_str(), static_cast<int>(draw), r.cad_summary.std * 1e3,
+              r.cad_summary.max_abs() * 1e3, r.fit_rms * 1e3, r.mean_uncertainty * 1e3, 100.0 * r.coverage_2u);
+  return r;
+}
+
 // Scan lines 4 mm apart without noise, a dent and a windowed wave between them (S13): across the lines only the
 // smoothing holds the fit, which swung there (contacts up to 0.56 mm off, u 0.1 µm). Whatever the fit does
 // there, never silently: every row's error within 3 u, and a warning that says why.
@@ -310,12 +320,7 @@ TEST(ShapeSuite, ScanLinesAreFollowedOnEveryDrawOfTheNoise) {
   ASSERT_EQ(drawn.sampling, simulation::Sampling::ScanLines);
   for (const std::uint64_t draw : test::kLight ? std::vector<std::uint64_t>{1} : std::vector<std::uint64_t>{0, 1, 2, 3, 4, 5}) {
     SCOPED_TRACE(draw);
-    simulation::ShapeCase c = drawn;
-    c.noise_draw = draw;
-    const ShapeCaseResult r = run_shape_case(c);
-    std::printf("D500, noise draw %d: std %.2f um, largest %.1f um, fitted centres %.2f um rms, mean u %.2f um, "
-                "coverage %.1f %%\n", static_cast<int>(draw), r.cad_summary.std * 1e3, r.cad_summary.max_abs() * 1e3,
-                r.fit_rms * 1e3, r.mean_uncertainty * 1e3, 100.0 * r.coverage_2u);
+    const ShapeCaseResult r = run_noise_draw(drawn, draw);
     EXPECT_LT(r.cad_summary.std, 0.0025);
     EXPECT_LT(r.cad_summary.max_abs(), 0.012);
     EXPECT_GE(r.coverage_2u, 0.90);
@@ -335,12 +340,7 @@ TEST(ShapeSuite, ASmoothShapeTheNominalsNetCannotFollowIsFollowedAlongScanLines)
   ASSERT_EQ(drawn.sampling, simulation::Sampling::ScanLines);
   for (const std::uint64_t draw : test::kLight ? std::vector<std::uint64_t>{0} : std::vector<std::uint64_t>{0, 1, 2}) {
     SCOPED_TRACE(draw);
-    simulation::ShapeCase c = drawn;
-    c.noise_draw = draw;
-    const ShapeCaseResult r = run_shape_case(c);
-    std::printf("D805, noise draw %d: std %.2f um, largest %.1f um, fitted centres %.2f um rms, mean u %.2f um, "
-                "coverage %.1f %%\n", static_cast<int>(draw), r.cad_summary.std * 1e3, r.cad_summary.max_abs() * 1e3,
-                r.fit_rms * 1e3, r.mean_uncertainty * 1e3, 100.0 * r.coverage_2u);
+    const ShapeCaseResult r = run_noise_draw(drawn, draw);
     EXPECT_LT(r.cad_summary.std, 0.0007);
     EXPECT_LT(r.cad_summary.max_abs(), 0.004);
     EXPECT_GE(r.coverage_2u, 0.95);
