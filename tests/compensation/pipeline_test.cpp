@@ -17,6 +17,7 @@
 #include "probecomp/simulation/freeform_case.hpp"
 #include "probecomp/simulation/measure.hpp"
 #include "probecomp/studies/freeform_study.hpp"
+#include "support/gross_errors.hpp"
 #include "support/light.hpp"
 
 namespace probecomp {
@@ -396,6 +397,8 @@ TEST(Pipeline, MultiFaceStepPartLandsEveryPointOnItsFace) {
 namespace probecomp {
 namespace {
 
+using testing::move_one_percent;
+
 // The paper's free-form case measured on an nu × nv grid, with the true part to score the results against.
 struct PaperPanel {
   simulation::FreeformCase c = simulation::paper_freeform_case();
@@ -417,25 +420,6 @@ struct PaperPanel {
     return out;
   }
 };
-
-// 1 % of the points, chosen by `seed`, moved 0.1–5 mm along their programmed normal, out or in: the probe's
-// direction of travel, where a dirty tip or a vibration puts a reading's error (a move along the surface would only
-// be a reading of another place). Returns which were moved.
-std::vector<char> move_one_percent(std::vector<Point3>& points, const std::vector<simulation::ProgrammedPoint>& plan,
-                                   std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::vector<std::size_t> order(points.size());
-  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::shuffle(order.begin(), order.end(), rng);
-  std::vector<char> moved(points.size(), 0);
-  std::uniform_real_distribution<double> size(0.1, 5.0);
-  for (std::size_t k = 0; k < points.size() / 100; ++k) {
-    const std::size_t i = order[k];
-    moved[i] = 1;
-    points[i] += (rng() % 2 ? 1.0 : -1.0) * size(rng) * plan[i].normal;
-  }
-  return moved;
-}
 
 // The run with gross errors against the run without those points: every moved point flagged, every other point of
 // the same status; returns how far the others' results moved (contact point or deviation, the larger), mm.
@@ -554,6 +538,8 @@ TEST(Pipeline, GrossOutliersMoveNoOtherPoint) {
 
 namespace probecomp {
 namespace {
+
+using testing::move_one_percent;
 
 // The distance of each point's contact from the true (actual) part, against its stated uncertainty, for the points
 // not moved; and whether each moved point was flagged.
