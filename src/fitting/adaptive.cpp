@@ -464,6 +464,16 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
     }
     // split: a flagged span with points enough to be split (flag_u and flag_v: the knot lines that split it).
     std::vector<char> flag_u(nsu, 0), flag_v(nsv, 0), span_flag(nsu * nsv, 0), split(nsu * nsv, 0);
+    // Marks span (a, b)'s knot lines for splitting: both, or (either_side_only) each only where points lie on both
+    // sides of it (AdaptiveFitOptions::split_only_where_points_either_side). Whether any was marked.
+    auto mark_lines = [&](std::size_t a, std::size_t b, bool either_side_only) {
+      const std::size_t s = a * nsv + b;
+      const bool u = !either_side_only || std::min(below_u[s], count[s] - below_u[s]) > 0;
+      const bool v = !either_side_only || std::min(below_v[s], count[s] - below_v[s]) > 0;
+      if (u) flag_u[a] = 1;
+      if (v) flag_v[b] = 1;
+      return u || v;
+    };
     result.spans_above_noise = 0;
     const double alpha = options.false_alarm / static_cast<double>(nsu * nsv);
     for (std::size_t a = 0; a < nsu; ++a) {
@@ -490,8 +500,7 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
           // floor holds between the lines, and whose creases between lines need the split: shape suite S29, its
           // worst region's ±2u coverage 94.6 % with it, 66.4 % without.)
           const bool any = !options.split_only_where_points_either_side || result.noise_sigma <= options.noise_floor;
-          if (any || std::min(below_u[s], count[s] - below_u[s]) > 0) flag_u[a] = 1;
-          if (any || std::min(below_v[s], count[s] - below_v[s]) > 0) flag_v[b] = 1;
+          (void)mark_lines(a, b, !any);
         }
       }
     }
@@ -528,8 +537,7 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
           const Pooled n = pooled(a, b);
           if (!(n.chi2 > n.count)) continue;
           span_flag[s] = split[s] = 1;
-          flag_u[a] = 1;
-          flag_v[b] = 1;
+          (void)mark_lines(a, b, false);
           trial = true;
         }
       }
@@ -539,14 +547,9 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
       for (std::size_t a = 0; a < nsu; ++a) {
         for (std::size_t b = 0; b < nsv; ++b) {
           const std::size_t s = a * nsv + b;
-          if (count[s] < options.min_points_to_split) continue;
           // (Split only where points lie either side of the knot line, as the span tests' refinement does here.)
-          const bool u_split = std::min(below_u[s], count[s] - below_u[s]) > 0;
-          const bool v_split = std::min(below_v[s], count[s] - below_v[s]) > 0;
-          if (!u_split && !v_split) continue;
+          if (count[s] < options.min_points_to_split || !mark_lines(a, b, true)) continue;
           span_flag[s] = split[s] = 1;
-          if (u_split) flag_u[a] = 1;
-          if (v_split) flag_v[b] = 1;
           trial = true;
         }
       }
