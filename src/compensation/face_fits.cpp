@@ -464,7 +464,7 @@ FitResult fit_faces(const PreparedModel& prepared, std::span<const Point3> raw,
       if (check.along_lines) {
         const detail::ScanLineDoubts doubts = detail::scan_line_doubts(
             fit->surface, start, pts, fit->params, fit->residuals, last_weights, fit->noise_sigma,
-            normal_check.line_variance_ratio);
+            normal_check.line_variance_ratio, !(fit->noise_sigma > surface.noise_floor));
         ff.line_bias.resize(members.size());
         ff.normal_unseen_angle.resize(members.size());
         ff.line_spacing = doubts.line_spacing;

@@ -35,7 +35,8 @@ constexpr std::size_t kSpacingSamples = 2000;
 
 ScanLineDoubts scan_line_doubts(const nurbs::Surface& fit, const nurbs::Surface& start, std::span<const Point3> centres,
                                 std::span<const fitting::SurfaceParameter> params, std::span<const double> residuals,
-                                std::span<const double> weights, double sigma, double line_variance_ratio) {
+                                std::span<const double> weights, double sigma, double line_variance_ratio,
+                                bool exact_data) {
   const std::size_t n = centres.size();
   ScanLineDoubts out{std::vector<double>(n, 0.0), std::vector<double>(n, 0.0), 0.0};
   std::vector<Point3> kept;
@@ -167,6 +168,31 @@ ScanLineDoubts scan_line_doubts(const nurbs::Surface& fit, const nurbs::Surface&
       out.normal_angle[k] = std::atan(std::abs(second.dot(nf.n)) * half);
     }
   });
+  if (!exact_data) return out;
+
+  // On exact data, the largest turn along the line within one spacing. Not on noisy lines: there the fit's
+  // curvature along a line carries its smoothing of the noise, and the window's largest value raised u without
+  // covering more (S29's crease at σ = 4.5 µm: mean u 2.28 -> 5.80 µm, worst region 86.5 % either way; S03 and S30,
+  // features on noisy lines: u 1.50 -> 2.28 and 1.07 -> 2.00 µm, their worst regions unchanged).
+  std::vector<double> widest(n, 0.0);
+  const double window = out.line_spacing;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto& range) {
+    std::vector<std::pair<std::uint32_t, double>> found;
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      const Vector3& t = direction[k];
+      if (!(t.squaredNorm() > 0.0)) continue;
+      found.clear();
+      const double q[3] = {centres[k].x(), centres[k].y(), centres[k].z()};
+      tree.tree.radiusSearch(q, window * window, found, nanoflann::SearchParams(32, 0.0, false));  // squared radius
+      double largest = out.normal_angle[k];
+      for (const auto& f : found) {
+        const Vector3 d = pts[f.first] - centres[k];
+        if (std::abs(d.dot(t)) >= 0.5 * d.norm()) largest = std::max(largest, out.normal_angle[kept_index[f.first]]);
+      }
+      widest[k] = largest;
+    }
+  });
+  out.normal_angle = std::move(widest);
   return out;
 }
 

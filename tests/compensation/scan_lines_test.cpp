@@ -34,16 +34,23 @@ struct PlaneLines {
 };
 
 // The bicubic plane z = 0 over the square, and the same net moved to z = c·x² (Bernstein coefficients of u² in
-// degree 3: 0, 0, 1/3, 1).
+// degree 3: 0, 0, 1/3, 1) or z = c·x³ (of u³: 0, 0, 0, 1).
 nurbs::Surface flat() { return nurbs::make_plane_patch({0, 0, 0}, {kSide, 0, 0}, {0, kSide, 0}, 3, 3); }
-nurbs::Surface bent(double c) {
+nurbs::Surface moved_by(const double (&bernstein)[4], double scale) {
   const nurbs::Surface s = flat();
   std::vector<HomogeneousPoint> Pw = s.homogeneous();
-  constexpr double kBernsteinOfUSquared[4] = {0.0, 0.0, 1.0 / 3.0, 1.0};
   for (int i = 0; i < s.num_u(); ++i) {
-    for (int j = 0; j < s.num_v(); ++j) Pw[static_cast<std::size_t>(i * s.num_v() + j)].z() = c * kSide * kSide * kBernsteinOfUSquared[i];
+    for (int j = 0; j < s.num_v(); ++j) Pw[static_cast<std::size_t>(i * s.num_v() + j)].z() = scale * bernstein[i];
   }
   return nurbs::Surface(s.U(), s.V(), std::move(Pw));
+}
+nurbs::Surface bent(double c) {
+  constexpr double kBernsteinOfUSquared[4] = {0.0, 0.0, 1.0 / 3.0, 1.0};
+  return moved_by(kBernsteinOfUSquared, c * kSide * kSide);
+}
+nurbs::Surface bent_cubically(double c) {
+  constexpr double kBernsteinOfUCubed[4] = {0.0, 0.0, 0.0, 1.0};
+  return moved_by(kBernsteinOfUCubed, c * kSide * kSide * kSide);
 }
 
 TEST(ScanLineDoubts, TheNormalMayTurnAcrossTheLinesAsMuchAsTheDeformationTurnsAlongThemOverHalfTheirSpacing) {
@@ -54,7 +61,7 @@ TEST(ScanLineDoubts, TheNormalMayTurnAcrossTheLinesAsMuchAsTheDeformationTurnsAl
   const nurbs::Surface start = flat(), fit = bent(c);
   const PlaneLines g(fit, 5, 4.0);
   const std::vector<double> residuals(g.points.size(), 0.0), weights(g.points.size(), 1.0);
-  const ScanLineDoubts d = scan_line_doubts(fit, start, g.points, g.params, residuals, weights, 4.5e-3, 1e-2);
+  const ScanLineDoubts d = scan_line_doubts(fit, start, g.points, g.params, residuals, weights, 4.5e-3, 1e-2, false);
   EXPECT_NEAR(d.line_spacing, 4.0, 1e-6);
   ASSERT_EQ(d.normal_angle.size(), g.points.size());
   for (std::size_t k = 0; k < g.points.size(); ++k) {
@@ -64,8 +71,30 @@ TEST(ScanLineDoubts, TheNormalMayTurnAcrossTheLinesAsMuchAsTheDeformationTurnsAl
     EXPECT_EQ(d.bias[k], 0.0) << k;
   }
   // The start itself: no deformation, nothing unseen.
-  const ScanLineDoubts none = scan_line_doubts(start, start, g.points, g.params, residuals, weights, 4.5e-3, 1e-2);
+  const ScanLineDoubts none = scan_line_doubts(start, start, g.points, g.params, residuals, weights, 4.5e-3, 1e-2, false);
   for (const double a : none.normal_angle) EXPECT_EQ(a, 0.0);
+}
+
+TEST(ScanLineDoubts, OnExactDataTheNormalMayTurnAsMuchAsTheDeformationTurnsAnywhereWithinASpacingAlongTheLine) {
+  // The fit z = c·x³: its curvature along the lines, 6c·x·n_z, grows along them. On exact data each point takes the
+  // largest over its line's points within one spacing (4.1 mm: the points 0.2 mm apart within it lie up to 4.0 mm
+  // on, up to the line's end at x = 22); on noisy data the point's own.
+  const double c = 5e-5;
+  const nurbs::Surface start = flat(), fit = bent_cubically(c);
+  const PlaneLines g(fit, 5, 4.1);
+  const std::vector<double> residuals(g.points.size(), 0.0), weights(g.points.size(), 1.0);
+  const auto turn = [&](double x) {
+    const double n_z = 1.0 / std::hypot(1.0, 3.0 * c * x * x);
+    return std::atan(6.0 * c * x * n_z * 4.1 / 2.0);
+  };
+  const ScanLineDoubts exact = scan_line_doubts(fit, start, g.points, g.params, residuals, weights, 0.0, 1e-2, true);
+  const ScanLineDoubts noisy = scan_line_doubts(fit, start, g.points, g.params, residuals, weights, 4.5e-3, 1e-2, false);
+  EXPECT_NEAR(exact.line_spacing, 4.1, 1e-6);
+  for (std::size_t k = 0; k < g.points.size(); ++k) {
+    const double x = g.points[k].x();
+    EXPECT_NEAR(noisy.normal_angle[k], turn(x), 1e-2 * turn(x)) << k;
+    EXPECT_NEAR(exact.normal_angle[k], turn(std::min(x + 4.0, 22.0)), 1e-2 * turn(x + 0.2)) << k;
+  }
 }
 
 TEST(ScanLineDoubts, AResidualMeanAlongALineIsItsBiasLessTheMeansNoise) {
@@ -79,14 +108,14 @@ TEST(ScanLineDoubts, AResidualMeanAlongALineIsItsBiasLessTheMeansNoise) {
   for (std::size_t k = 0; k < g.points.size(); ++k) residuals[k] = g.line[k] == 1 ? mean : 0.0;
   std::vector<double> weights(g.points.size(), 1.0);
   weights[101 + 50] = 0.0;  // a point left out gets the bias of the in-fit points around it
-  const ScanLineDoubts d = scan_line_doubts(s, s, g.points, g.params, residuals, weights, sigma, 1e-2);
+  const ScanLineDoubts d = scan_line_doubts(s, s, g.points, g.params, residuals, weights, sigma, 1e-2, false);
   for (std::size_t k = 0; k < g.points.size(); ++k) {
     if (g.along[k] < 25 || g.along[k] > 75) continue;
     EXPECT_NEAR(d.bias[k], g.line[k] == 1 ? std::sqrt(mean * mean - sigma * sigma / 12.0) : 0.0, 1e-12) << k;
   }
   // A residual mean within its own noise is no bias.
   for (double& r : residuals) r = r > 0.0 ? 1e-3 : 0.0;
-  for (const double b : scan_line_doubts(s, s, g.points, g.params, residuals, weights, sigma, 1e-2).bias) EXPECT_EQ(b, 0.0);
+  for (const double b : scan_line_doubts(s, s, g.points, g.params, residuals, weights, sigma, 1e-2, false).bias) EXPECT_EQ(b, 0.0);
 }
 
 TEST(ScanLineDoubts, AGridIsNotLines) {
@@ -101,7 +130,7 @@ TEST(ScanLineDoubts, AGridIsNotLines) {
     }
   }
   const std::vector<double> residuals(points.size(), 5e-3), weights(points.size(), 1.0);
-  const ScanLineDoubts d = scan_line_doubts(fit, start, points, params, residuals, weights, 4.5e-3, 1e-2);
+  const ScanLineDoubts d = scan_line_doubts(fit, start, points, params, residuals, weights, 4.5e-3, 1e-2, false);
   for (std::size_t k = 0; k < points.size(); ++k) {
     EXPECT_EQ(d.bias[k], 0.0) << k;
     EXPECT_EQ(d.normal_angle[k], 0.0) << k;

@@ -83,7 +83,7 @@ TEST(ShapeSuite, ScanLinesWithoutNoiseStateTheirErrorInU) {
 TEST(ShapeSuite, ScanLinesWithoutNoiseDoNotRingBetweenTheLines) {
   if (test::kLight) GTEST_SKIP() << "ScanLinesWithoutNoiseStateTheirErrorInU runs the same code at 3 000 points";
   for (const auto& [name, std_bound, max_bound, u_bound] :
-       {std::tuple{"S13", 0.001, 0.020, 3.0}, std::tuple{"S29", 0.005, 0.100, 5.0}}) {
+       {std::tuple{"S13", 0.001, 0.020, 3.0}, std::tuple{"S29", 0.005, 0.100, 3.0}}) {
     SCOPED_TRACE(name);
     const ShapeCaseResult r = run_shape_case(suite_case(name));
     double worst = 0.0;
@@ -92,11 +92,14 @@ TEST(ShapeSuite, ScanLinesWithoutNoiseDoNotRingBetweenTheLines) {
       ASSERT_TRUE(std::isfinite(r.cad.points[k].uncertainty) && r.cad.points[k].uncertainty > 0.0) << k;
       worst = std::max(worst, std::abs(r.cad_error[k]) / r.cad.points[k].uncertainty);
     }
-    std::printf("%s: std %.2f um, largest %.1f um, worst error %.2f u\n", name, r.cad_summary.std * 1e3,
-                r.cad_summary.max_abs() * 1e3, worst);
+    std::printf("%s: std %.2f um, largest %.1f um, worst error %.2f u, worst region's ±2u coverage %.1f %%\n", name,
+                r.cad_summary.std * 1e3, r.cad_summary.max_abs() * 1e3, worst, 100.0 * r.worst_region_coverage_2u);
     EXPECT_LT(r.cad_summary.std, std_bound);
     EXPECT_LT(r.cad_summary.max_abs(), max_bound);
     EXPECT_LE(worst, u_bound);
+    // Issue 48's bar in every region: S29's normals across the lines, 2–4° off about the crease, are within the
+    // unseen turn taken over a spacing along each line (compensation/scan_lines.hpp; 79.1 % with the point's own).
+    EXPECT_GE(r.worst_region_coverage_2u, 0.88);
   }
 }
 
