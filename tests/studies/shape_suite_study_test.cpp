@@ -349,11 +349,14 @@ TEST(ShapeSuite, ASmoothShapeTheNominalsNetCannotFollowIsFollowedAlongScanLines)
 // noise. With noise an anisotropic fit is tried too (compensation/face_fits.cpp): on D409 (a 54 µm wave 13 mm long
 // at 76° across lines on a cylinder) it follows the wave, std 1.234 -> 0.782 µm against the reference smoother's
 // 0.771; on S16 (a twist and a 25 mm wave) θ chosen by leave-span-out alone rang between the lines, std 0.772 ->
-// 3.024 µm, and the lines left out refuse it there (predicted 5.7 µm rms against 4.7 isotropic).
+// 3.024 µm, and the lines left out refused it (predicted 5.7 µm rms against 4.7 isotropic); the θ of its last net
+// held from the first predicts them within 4.5 µm, and is taken: std 0.638 µm against the reference's 0.615. On S06
+// (a crease, a ripple and a saddle on a panel) the lines left out refuse it (14 µm rms against 10.8).
 TEST(ShapeSuite, AnAnisotropicEnergyOnScanLinesFollowsAWaveAcrossThemWithoutRingingBetweenThem) {
-  for (const auto& [c, std_bound, anisotropic] :
-       {std::tuple{simulation::draw_shape_case(409, 0.0045), 0.0009, true},
-        std::tuple{suite_case("S16"), 0.0009, false}}) {
+  for (const auto& [c, std_bound, told] :
+       {std::tuple{simulation::draw_shape_case(409, 0.0045), 0.0009, "; anisotropic (log10 theta"},
+        std::tuple{suite_case("S16"), 0.0007, ", held from the first net): interior lines left out"},
+        std::tuple{suite_case("S06"), 0.0009, ") refused: interior lines left out"}}) {
     SCOPED_TRACE(c.name);
     ASSERT_EQ(c.sampling, simulation::Sampling::ScanLines);
     const ShapeCaseResult r = run_shape_case(c);
@@ -362,7 +365,7 @@ TEST(ShapeSuite, AnAnisotropicEnergyOnScanLinesFollowsAWaveAcrossThemWithoutRing
     std::printf("%s: std %.3f um, largest %.1f um; %s\n", c.name.c_str(), r.cad_summary.std * 1e3,
                 r.cad_summary.max_abs() * 1e3, why.c_str());
     EXPECT_LT(r.cad_summary.std, std_bound);
-    EXPECT_EQ(why.find(anisotropic ? "; anisotropic (" : ") refused: interior lines left out") != std::string::npos, true);
+    EXPECT_NE(why.find(told), std::string::npos);
     EXPECT_GE(r.coverage_2u, 0.92);
   }
 }
