@@ -31,6 +31,10 @@ constexpr int kBiasLevelNeighbours = 64;
 // Line points sampled for the spacing's median.
 constexpr std::size_t kSpacingSamples = 2000;
 
+// Whether offset d from a point lies along its line (direction t, unit): within 60° of it (|cos| ≥ 1/2). The
+// spacing is measured to points that do not; the unseen turn's window takes those that do.
+bool lies_along(const Vector3& d, const Vector3& t) { return std::abs(d.dot(t)) >= 0.5 * d.norm(); }
+
 }  // namespace
 
 ScanLineDoubts scan_line_doubts(const nurbs::Surface& fit, const nurbs::Surface& start, std::span<const Point3> centres,
@@ -133,7 +137,7 @@ ScanLineDoubts scan_line_doubts(const nurbs::Surface& fit, const nurbs::Surface&
       for (const auto& f : found) {
         const Vector3 d = pts[f.first] - centres[k];
         const double length = d.norm();
-        if (length > 0.0 && std::abs(d.dot(direction[k])) < 0.5 * length) nearest = std::min(nearest, length);
+        if (length > 0.0 && !lies_along(d, direction[k])) nearest = std::min(nearest, length);
       }
       // (One within the radius is the nearest of all: any nearer one would be within it too.)
       if (std::isfinite(nearest)) {
@@ -187,7 +191,7 @@ ScanLineDoubts scan_line_doubts(const nurbs::Surface& fit, const nurbs::Surface&
       double largest = out.normal_angle[k];
       for (const auto& f : found) {
         const Vector3 d = pts[f.first] - centres[k];
-        if (std::abs(d.dot(t)) >= 0.5 * d.norm()) largest = std::max(largest, out.normal_angle[kept_index[f.first]]);
+        if (lies_along(d, t)) largest = std::max(largest, out.normal_angle[kept_index[f.first]]);
       }
       widest[k] = largest;
     }
