@@ -3,9 +3,13 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
+#include "probecomp/fitting/adaptive.hpp"
 #include "probecomp/fitting/spans.hpp"
+#include "probecomp/geometry/statistics.hpp"
 
 #include "penalty.hpp"
 
@@ -72,6 +76,41 @@ nurbs::Surface on_net_of(const nurbs::Surface& start, const nurbs::Surface& fitt
   if (!xu.empty()) s = nurbs::refine_knots_u(s, xu);
   if (!xv.empty()) s = nurbs::refine_knots_v(s, xv);
   return s;
+}
+
+// Each span's neighbourhood is gathered and its median taken on its own (in parallel, the same whatever the thread
+// count).
+std::vector<double> span_spread(std::span<const double> standardised, std::span<const double> weights,
+                                std::span<const std::uint32_t> span, std::size_t nsu, std::size_t nsv, double sigma) {
+  // The points' |standardised residuals| grouped by span (a counting sort), in-fit points only; in single precision,
+  // which a median of a spread needs no more than (a million points: 4 MB for the while).
+  std::vector<std::size_t> start(nsu * nsv + 1, 0);
+  for (std::size_t k = 0; k < span.size(); ++k) {
+    if (weights.empty() || weights[k] > 0.0) ++start[span[k] + 1];
+  }
+  for (std::size_t s = 0; s < nsu * nsv; ++s) start[s + 1] += start[s];
+  std::vector<float> grouped(start.back());
+  {
+    std::vector<std::size_t> next(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < span.size(); ++k) {
+      if (weights.empty() || weights[k] > 0.0) grouped[next[span[k]]++] = static_cast<float>(std::abs(standardised[k]));
+    }
+  }
+  std::vector<double> by_span(nsu * nsv, sigma);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nsu * nsv, 64), [&](const auto& range) {
+    std::vector<double> around;  // in double for median_in_place
+    for (std::size_t s = range.begin(); s != range.end(); ++s) {
+      around.clear();
+      for_each_around(s / nsv, s % nsv, nsu, nsv, [&](std::size_t s2) {
+        around.insert(around.end(), grouped.begin() + static_cast<std::ptrdiff_t>(start[s2]),
+                      grouped.begin() + static_cast<std::ptrdiff_t>(start[s2 + 1]));
+      });
+      if (around.size() >= static_cast<std::size_t>(kMinLocalPoints)) {
+        by_span[s] = std::max(geometry::kMadToSigma * geometry::median_in_place(around), sigma);
+      }
+    }
+  });
+  return by_span;
 }
 
 }  // namespace probecomp::fitting::detail

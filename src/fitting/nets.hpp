@@ -1,6 +1,8 @@
 #pragma once
-// Knot nets of the adaptive fit and its residuals along the normal (nets.cpp). Private to fitting/.
+// Knot nets of the adaptive fit and its residuals along the normal and by span (nets.cpp). Private to fitting/.
 
+#include <cstddef>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -27,5 +29,12 @@ struct AlongNormal {
 // `start` with the knots of `fitted` it lacks inserted (each knot vector of `fitted` a refinement of the start's):
 // the start's shape on the fit's net.
 [[nodiscard]] nurbs::Surface on_net_of(const nurbs::Surface& start, const nurbs::Surface& fitted);
+
+// Each span's spread of the residuals (AdaptiveFitResult::span_spread): 1.4826 × the median |standardised residual|
+// over the in-fit points in it and the eight around it (`span`: each point's span, a · nsv + b), never below
+// `sigma`; `sigma` where fewer than kMinLocalPoints.
+[[nodiscard]] std::vector<double> span_spread(std::span<const double> standardised, std::span<const double> weights,
+                                              std::span<const std::uint32_t> span, std::size_t nsu, std::size_t nsv,
+                                              double sigma);
 
 }  // namespace probecomp::fitting::detail

@@ -122,6 +122,9 @@ struct AdaptiveFitOptions {
   // 200–500): faces with a region whose ±2u coverage is under 88 %, 33 -> 27; the lowest overall 92.6 -> 96.0 %;
   // the std unchanged (u only). Costs a fit on the finer net at a fixed λ: BM_Compensate10k 182 -> 218 ms.
   bool representation_bias = true;
+  // On noisy data, once the net is final (every span within the noise), its smoothing moved as two directional
+  // weights from the λ and θ chosen (PenalizedFitOptions::directional_smoothing): one more fit of the last net.
+  bool directional_smoothing = true;
 };
 
 // Fewer points than this around a point (its span and the eight around it) give no median worth the name: their

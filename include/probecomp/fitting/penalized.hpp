@@ -74,6 +74,10 @@ struct PenalizedFitOptions {
   bool anisotropic = true;
   std::optional<double> log10_anisotropy;
   double max_log10_anisotropy = 2.0;
+  // After λ and θ (chosen or given), the smoothing moved as two directional weights, λθ along u and λ/θ along v,
+  // one at a time, where that predicts better (see fit_penalized): θ sought at one λ stops short where the best
+  // lies along a diagonal valley of (λ, θ).
+  bool directional_smoothing = false;
   // Decades added to the λ cross-validation chooses, for studies of that choice against the truth (shape_suite
   // --oracle); 0 in use.
   double log10_smoothing_offset = 0.0;
@@ -97,6 +101,7 @@ struct PenalizedFitResult {
   double weight_sum = 0.0;          // Σ w_k
   int points_used = 0;              // points with w_k > 0
   int evaluations = 0;              // factorisations made in the search
+  bool directional_moved = false;   // the directional weights' search moved the smoothing (see the options)
   // Per point: a_kᵀ (AᵀWA + λG + εI)⁻¹ a_k, a_k its row of the basis. The fitted point's variance is σ² times
   // this (Wahba's Bayesian posterior variance, which also covers the smoothing bias on average: Nychka 1988);
   // w_k times this is the point's hat diagonal (its leverage). Defined for left-out points too.
