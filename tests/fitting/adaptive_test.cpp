@@ -313,7 +313,8 @@ TEST(FitSurface, TheBalancedPenaltyFollowsANarrowDentWithoutRoughnessElsewhere) 
 // larger), 1.130, 1.129 and 1.144 µm without (log10 θ +0.3).
 TEST(FitSurface, ARidgeAlongOneDirectionIsSmoothedAlongItMoreThanAcross) {
   const Surface nominal = nominal_patch();
-  auto truth = [&](double u, double v) {
+  // (Point3, not auto: an Eigen expression would refer to the evaluations' temporaries after they are gone.)
+  auto truth = [&](double u, double v) -> Point3 {
     const double d = 100.0 * (v - 0.55) / 3.0;
     return nurbs::evaluate(nominal, u, v) - 0.1 * std::exp(-0.5 * d * d) * nurbs::unit_normal(nominal, u, v).n;
   };
