@@ -531,27 +531,29 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
     const auto status_now = result.spans_above_noise == 0 ? AdaptiveFitResult::Status::OK
                                                            : AdaptiveFitResult::Status::NoiseNotReached;
     if (polishing) return finish(status_now);
-    // The net is final and explains the data: its smoothing is moved as two directional weights from the λ and θ
-    // chosen, one fit more (PenalizedFitOptions::directional_smoothing). θ is sought at one λ, then λ at that θ,
-    // which stops short where a feature lies along a parameter direction (shape suite D910, a wave in a band on a
-    // cylinder, random points: 0.973 -> 0.643 µm; D1114, a crease at 83°: 1.018 -> 0.784; D1002, a wave in a band
-    // on a panel: 0.910 -> 0.722). Not on a net that did not reach the noise: its smoothing is then traded against
-    // its misfit, and moving it changes which readings are outliers (S11, a crease the net does not follow: 0.672
-    // -> 0.926 µm); nor while a refinement is on trial, whose score is compared with the kept round's; nor where
-    // θ or λ were given.
-    if (options.directional_smoothing && result.spans_above_noise == 0 && !trial && !trying &&
-        result.noise_sigma > options.noise_floor && options.fit.anisotropic && !options.fit.log10_anisotropy &&
-        !options.fit.log10_smoothing && !options.fit.lambda) {
-      polishing = true;
-      unpolished = result;
-      complete(*unpolished, status_now);
-      unpolished->thin_misfit_seen = thin_misfit_seen;
-      fit_options.log10_anisotropy = fit.log10_anisotropy;
-      fit_options.lambda = fit.lambda;
-      fit_options.directional_smoothing = true;
-      continue;
+    if (result.spans_above_noise == 0 && !trial) {
+      // The net is final and explains the data: its smoothing is moved as two directional weights from the λ and
+      // θ chosen, one fit more (PenalizedFitOptions::directional_smoothing). θ is sought at one λ, then λ at that
+      // θ, which stops short where a feature lies along a parameter direction (shape suite D910, a wave in a band
+      // on a cylinder, random points: 0.973 -> 0.643 µm; D1114, a crease at 83°: 1.018 -> 0.784; D1002, a wave in
+      // a band on a panel: 0.910 -> 0.722). Not on a net that did not reach the noise: its smoothing is then traded
+      // against its misfit, and moving it changes which readings are outliers (S11, a crease the net does not
+      // follow: 0.672 -> 0.926 µm); nor while a refinement is on trial, whose score is compared with the kept
+      // round's; nor where θ or λ were given.
+      if (options.directional_smoothing && !trying && result.noise_sigma > options.noise_floor &&
+          options.fit.anisotropic && !options.fit.log10_anisotropy && !options.fit.log10_smoothing &&
+          !options.fit.lambda) {
+        polishing = true;
+        unpolished = result;
+        complete(*unpolished, AdaptiveFitResult::Status::OK);
+        unpolished->thin_misfit_seen = thin_misfit_seen;
+        fit_options.log10_anisotropy = fit.log10_anisotropy;
+        fit_options.lambda = fit.lambda;
+        fit_options.directional_smoothing = true;
+        continue;
+      }
+      return finish(AdaptiveFitResult::Status::OK);
     }
-    if (result.spans_above_noise == 0 && !trial) return finish(AdaptiveFitResult::Status::OK);
     if (round == options.max_rounds) return finish(AdaptiveFitResult::Status::NoiseNotReached);
     if (trying || trial) {
       kept = result;
