@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <numeric>
 #include <optional>
 
 #include "probecomp/fitting/noise_estimate.hpp"
@@ -19,6 +18,7 @@
 #include "hierarchy_marks.hpp"
 #include "nets.hpp"
 #include "penalty.hpp"
+#include "refinement_tests.hpp"
 #include "representation_bias.hpp"
 #include "span_weights.hpp"
 
@@ -36,54 +36,6 @@ using geometry::median_in_place;
 // at 1.25 before: at 1.25 here the demo's std is 0.96 µm and the suite's 1.340 µm median; at 1.35, 0.89 µm (as
 // before) and 1.321 µm.
 constexpr double kMisfitRatio = 1.35;
-
-// Neighbouring residuals' correlation counts as a misfit's above this many standard errors of it on independent
-// noise, 1/√(K·n) for n points of K neighbours each: three, since the pairs overlap (see fit_surface).
-constexpr double kCorrelationStandardErrors = 3.0;
-
-// Draws of pure noise run through a fit (fitting::null_statistics) to judge its residuals: their mean correlation is
-// then known to about a third of its spread. Four solves with the fit's factor.
-constexpr int kNullProbes = 12;
-
-// Whether neighbouring residuals correlate beyond what the fit alone makes of pure noise: by more than
-// kCorrelationStandardErrors of the larger of its null draws' spread and 1/√(K·n) above their mean (below 0, as a
-// fit's residuals repel one another by about its leverage: −0.02 to −0.08 on the shape suite's final fits). Above
-// 0 by as much, no draws are needed; a fit too large to keep its basis rows is measured against that alone.
-bool correlated_beyond_the_fit(const LocalPredictionNoise& local_noise, std::span<const double> residuals,
-                               const PenalizedFitResult& fit) {
-  const double observed = local_noise.neighbour_correlation(residuals);
-  const double se = 1.0 / std::sqrt(static_cast<double>(LocalPredictionNoise::kNeighbours) *
-                                    static_cast<double>(std::max<std::size_t>(local_noise.tested(), 1)));
-  if (observed > kCorrelationStandardErrors * se) return true;
-  const std::vector<double> null = null_statistics(
-      fit, kNullProbes, [&](std::span<const double> r) { return local_noise.neighbour_correlation(r); });
-  if (null.size() < 2) return false;
-  const double mean = std::accumulate(null.begin(), null.end(), 0.0) / static_cast<double>(null.size());
-  double squares = 0.0;
-  for (double x : null) squares += (x - mean) * (x - mean);
-  const double sd = std::sqrt(squares / static_cast<double>(null.size() - 1));
-  return observed > mean + kCorrelationStandardErrors * std::max(sd, se);
-}
-
-// Along scan lines a fit whose penalty does nothing (its effective degrees of freedom above this share of its
-// control points) is at the end of what its net can follow, and a refinement is tried even where no span's χ² stands
-// out: on the nominal's own coarse net a smooth misfit of a fourth of σ hides in the residuals' spread (D805, a
-// 275 µm saddle on a cylinder scanned along lines, σ = 4.5 µm: spread 4.67 µm, local prediction errors 4.54 µm; 20
-// control points, contacts 1.14 µm std where the reference smoother reaches 0.51). The refined fit is kept when it
-// explains significantly more than the coarse one (an F test at kSaturatedTrialSignificance on the weighted residual
-// sums, the degrees of freedom the fits' traces): leave-span-out scores of different nets are not comparable.
-constexpr double kSaturatedShare = 0.9;
-constexpr double kSaturatedTrialSignificance = 0.01;
-
-// Whether a fit with residual sum `rss1` at `edf1` explains significantly more than one with `rss0` at `edf0` of the
-// same `points`: (rss0 − rss1)/(edf1 − edf0) over rss1/(points − edf1) above the F quantile, taken as χ²/d
-// (denominators of thousands of degrees of freedom).
-bool explains_significantly_more(double rss0, double edf0, double rss1, double edf1, int points) {
-  const double d1 = edf1 - edf0, d2 = points - edf1;
-  if (!(d1 > 0.5) || !(d2 > 0.0) || !(rss1 > 0.0)) return false;
-  const double F = ((rss0 - rss1) / d1) / (rss1 / d2);
-  return F > geometry::chi2_upper_quantile(d1, kSaturatedTrialSignificance) / d1;
-}
 
 // A neighbourhood's mean-square excess counts as bias only above the χ² quantile exceeded by noise alone with
 // this probability (see the bias estimate in fit_surface).
@@ -248,11 +200,13 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
   std::optional<AdaptiveFitResult> kept;
   double kept_cv = std::numeric_limits<double>::infinity();
   double kept_rss = 0.0, kept_edf = 0.0;  // and its residual sum and trace, for scan lines' trials
+  bool kept_saturated = false;            // and whether its penalty did nothing (detail::saturated)
   const bool by_f_test = fit_options.cross_validation == CrossValidation::LeaveSpanOut;
   auto undone = [&](const PenalizedFitResult& fit) {
     if (!trying) return false;
     if (!fit.ok()) return true;
-    return by_f_test ? !explains_significantly_more(kept_rss, kept_edf, fit.rss, fit.effective_dof, fit.points_used)
+    return by_f_test ? !detail::refinement_kept(kept_rss, kept_edf, kept_saturated, fit.rss, fit.effective_dof,
+                                                fit.points_used)
                      : !(fit.cv_score < kept_cv);
   };
   auto restored = [&] {
@@ -267,13 +221,52 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
   // round's result, returned where the search does not move (or that fit fails).
   bool polishing = false;
   std::optional<AdaptiveFitResult> unpolished;
+  const bool polish_allowed = options.directional_smoothing && options.fit.anisotropic &&
+                              !options.fit.log10_anisotropy && !options.fit.log10_smoothing && !options.fit.lambda;
+  auto start_polishing = [&](const AdaptiveFitResult& last) {  // `last` completed as a final result
+    polishing = true;
+    unpolished = last;
+    unpolished->thin_misfit_seen = thin_misfit_seen;
+    fit_options.log10_anisotropy = last.log10_anisotropy;
+    fit_options.lambda = last.lambda;
+    fit_options.directional_smoothing = true;
+  };
+  // The kept round's net, penalty weights and options (taken with `kept`): where a refinement tried is undone and
+  // the kept net explains the data, that net is polished as any final net is (see below), not returned unpolished
+  // (scan lines, D1102: 1.271 µm polished, 1.381 not).
+  struct KeptNet {
+    Surface target;
+    std::optional<HierarchicalBasis> basis;
+    std::vector<double> span_weight;
+    PenalizedFitOptions fit_options;
+  };
+  std::optional<KeptNet> kept_net;
+  auto polish_kept = [&] {
+    if (!kept_net || kept->status != AdaptiveFitResult::Status::OK || !polish_allowed ||
+        !(kept->noise_sigma > options.noise_floor)) {
+      return false;
+    }
+    target = std::move(kept_net->target);
+    basis = std::move(kept_net->basis);
+    span_weight = std::move(kept_net->span_weight);
+    fit_options = std::move(kept_net->fit_options);
+    kept_net.reset();
+    t = kept->params;
+    trying = false;
+    result = *kept;
+    start_polishing(*kept);
+    return true;
+  };
   for (int round = 0;; ++round) {
     PenalizedFitResult fit = fit_once(fit_options);
     if (polishing && (!fit.ok() || !fit.directional_moved)) return std::move(*unpolished);
     // A round tried (see below) whose fit predicts left-out points no better is undone: judged before the
     // parameter corrections (the points' parameters are those the kept fit was scored with), so that a refinement
     // undone costs one fit, not three, and again after them.
-    if (undone(fit)) return restored();
+    if (undone(fit)) {
+      if (polish_kept()) continue;
+      return restored();
+    }
     for (int c = 0; c < options.parameter_corrections && fit.ok(); ++c) {
       t = correct_parameters(fit.surface, points, t);
       // The points moved along the surface by a fraction of their spacing: the smoothing is sought within
@@ -292,7 +285,10 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
       }
       fit = fit_once(near);
     }
-    if (undone(fit)) return restored();
+    if (undone(fit)) {
+      if (polish_kept()) continue;
+      return restored();
+    }
     if (polishing && !fit.ok()) return std::move(*unpolished);
     if (!fit.ok()) {
       result.status = fit.status == PenalizedFitResult::Status::NotDone ? AdaptiveFitResult::Status::NotDone
@@ -502,7 +498,7 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
     if (result.spans_above_noise == 0 && round < options.max_rounds && result.noise_sigma > options.noise_floor &&
         options.fit.cross_validation == CrossValidation::LeaveOneOut &&
         ((std::isfinite(local) && spread > local) ||
-         correlated_beyond_the_fit(local_noise, result.residuals, fit))) {
+         detail::correlated_beyond_the_fit(local_noise, result.residuals, fit))) {
       thin_misfit_seen = true;
       for (std::size_t a = 0; a < nsu; ++a) {
         for (std::size_t b = 0; b < nsv; ++b) {
@@ -517,7 +513,7 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
       }
     }
     if (result.spans_above_noise == 0 && round < options.max_rounds && result.noise_sigma > options.noise_floor &&
-        by_f_test && fit.effective_dof > kSaturatedShare * unknowns) {
+        by_f_test) {
       for (std::size_t a = 0; a < nsu; ++a) {
         for (std::size_t b = 0; b < nsv; ++b) {
           const std::size_t s = a * nsv + b;
@@ -540,28 +536,24 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
       // against its misfit, and moving it changes which readings are outliers (S11, a crease the net does not
       // follow: 0.672 -> 0.926 µm); nor while a refinement is on trial, whose score is compared with the kept
       // round's; nor where θ or λ were given.
-      if (options.directional_smoothing && !trying && result.noise_sigma > options.noise_floor &&
-          options.fit.anisotropic && !options.fit.log10_anisotropy && !options.fit.log10_smoothing &&
-          !options.fit.lambda) {
-        polishing = true;
-        unpolished = result;
-        complete(*unpolished, AdaptiveFitResult::Status::OK);
-        unpolished->thin_misfit_seen = thin_misfit_seen;
-        fit_options.log10_anisotropy = fit.log10_anisotropy;
-        fit_options.lambda = fit.lambda;
-        fit_options.directional_smoothing = true;
+      if (polish_allowed && !trying && result.noise_sigma > options.noise_floor) {
+        AdaptiveFitResult last = result;
+        complete(last, AdaptiveFitResult::Status::OK);
+        start_polishing(last);
         continue;
       }
       return finish(AdaptiveFitResult::Status::OK);
     }
     if (round == options.max_rounds) return finish(AdaptiveFitResult::Status::NoiseNotReached);
     if (trying || trial) {
+      kept_net = KeptNet{target, basis, span_weight, fit_options};
       kept = result;
       complete(*kept, status_now);
       kept->refinement_rejected = status_now != AdaptiveFitResult::Status::OK;
       kept_cv = fit.cv_score;
       kept_rss = fit.rss;
       kept_edf = fit.effective_dof;
+      kept_saturated = detail::saturated(fit.effective_dof, unknowns);
       trying = true;
     }
     // The penalty's weight over the face follows the fit's own roughness (detail::roughness_span_weights, a pilot

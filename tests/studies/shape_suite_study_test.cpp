@@ -14,6 +14,7 @@
 #include <random>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "probecomp/cad/locator.hpp"
@@ -312,16 +313,19 @@ TEST(ShapeSuite, ScanLinesAtThreeMicrometresAreFollowed) {
 // And u states that error, neither less nor many times more: a degenerate local cubic in the normal check had held
 // it at a mean of 31 µm here (±2u covering 96 %); with the check sound, the bias along the lines and the normal across
 // them that no data show (compensation/scan_lines.hpp), ±2u covers 93.6–95.8 % over draws 0–5 at a mean u of
-// 1.54–1.84 µm, about the error's std.
+// 1.54–1.84 µm, about the error's std. With a refinement tried on every net that reaches the noise (not only on
+// saturated ones; fitting/refinement_tests.hpp) the six draws reach 1.30–1.50 µm (1.48–2.01 before), ±2u covering
+// 95.3–98.1 %, largest 5.7–13.5 µm: the 13.5 µm row (draw 0) is stated with a u of 12.8 µm, while draw 3's largest,
+// 10.4 µm at the face's edge, has a u of 2.3 µm (before: 7.2 µm).
 TEST(ShapeSuite, ScanLinesAreFollowedOnEveryDrawOfTheNoise) {
   const simulation::ShapeCase drawn = simulation::draw_shape_case(500, 0.0045);
   ASSERT_EQ(drawn.sampling, simulation::Sampling::ScanLines);
   for (const std::uint64_t draw : test::kLight ? std::vector<std::uint64_t>{1} : std::vector<std::uint64_t>{0, 1, 2, 3, 4, 5}) {
     SCOPED_TRACE(draw);
     const ShapeCaseResult r = run_noise_draw(drawn, draw);
-    EXPECT_LT(r.cad_summary.std, 0.0025);
-    EXPECT_LT(r.cad_summary.max_abs(), 0.012);
-    EXPECT_GE(r.coverage_2u, 0.90);
+    EXPECT_LT(r.cad_summary.std, 0.0017);
+    EXPECT_LT(r.cad_summary.max_abs(), 0.015);
+    EXPECT_GE(r.coverage_2u, 0.94);
     EXPECT_LE(r.coverage_2u, 0.99);
     EXPECT_LT(r.mean_uncertainty, 1.5 * r.cad_summary.std);
   }
@@ -330,9 +334,9 @@ TEST(ShapeSuite, ScanLinesAreFollowedOnEveryDrawOfTheNoise) {
 // A smooth shape the nominal's coarse net cannot follow, scanned along lines (D805: a 275 µm saddle on a cylinder,
 // σ = 4.5 µm): its misfit, a fourth of σ, hid in the residuals' spread, no span stood out, and the fit stayed on the
 // nominal's 20 control points with no penalty at work (contacts 1.13–1.15 µm std on four draws, the reference
-// smoother 0.51 µm). A refinement is now tried where the net is saturated and kept on an F test
-// (fitting/adaptive.cpp): 0.33–0.47 µm on the first three draws. Not on exact data, nor on faces whose nets never
-// saturate (the suite's scan cases print the same).
+// smoother 0.51 µm). A refinement is now tried once the noise is reached and kept on an F test
+// (fitting/refinement_tests.hpp; the net saturated, no more is asked): 0.33–0.47 µm on the first three draws. Not on
+// exact data.
 TEST(ShapeSuite, ASmoothShapeTheNominalsNetCannotFollowIsFollowedAlongScanLines) {
   const simulation::ShapeCase drawn = simulation::draw_shape_case(805, 0.0045);
   ASSERT_EQ(drawn.sampling, simulation::Sampling::ScanLines);
@@ -341,6 +345,28 @@ TEST(ShapeSuite, ASmoothShapeTheNominalsNetCannotFollowIsFollowedAlongScanLines)
     const ShapeCaseResult r = run_noise_draw(drawn, draw);
     EXPECT_LT(r.cad_summary.std, 0.0007);
     EXPECT_LT(r.cad_summary.max_abs(), 0.004);
+    EXPECT_GE(r.coverage_2u, 0.95);
+  }
+}
+
+// Broad shapes on a net whose penalty still works (not saturated), scanned along lines: no span stands out, and a
+// refinement was tried on saturated nets only, so they stayed on the nominal's net (D915, a 92 µm crease over 2.2 mm
+// and a long wave: 1.165 µm std; D911, a bulge and a 17 mm wave on the hood: 1.314; D712, a bulge: 0.876; the
+// reference smoother 0.857, 0.878, 0.691). Tried on every net that reaches the noise and kept only if it also lowers
+// the expected prediction error (fitting/refinement_tests.hpp): 0.808, 0.980, 0.712 µm. And a narrow dent among lines
+// (D1006, 139 µm of σ 0.9 mm), which a refinement over the whole face would follow only at the cost of the noise
+// everywhere (0.416 µm with the prediction test at Mallows' 2σ² a degree of freedom), stays where it was: 0.349 µm.
+TEST(ShapeSuite, ABroadShapeAlongScanLinesIsRefinedForAndANarrowDentIsNot) {
+  for (const auto& [seed, std_bound] : test::cases<std::pair<std::uint64_t, double>>(
+           {{915, 0.00095}, {1006, 0.00038}, {911, 0.0011}, {712, 0.00080}})) {
+    const simulation::ShapeCase c = simulation::draw_shape_case(seed, 0.0045);
+    SCOPED_TRACE(c.name);
+    ASSERT_EQ(c.sampling, simulation::Sampling::ScanLines);
+    const ShapeCaseResult r = run_shape_case(c);
+    std::printf("%s: std %.3f um, largest %.1f um, +-2u %.1f %%\n", c.name.c_str(), r.cad_summary.std * 1e3,
+                r.cad_summary.max_abs() * 1e3, 100.0 * r.coverage_2u);
+    EXPECT_LT(r.cad_summary.std, std_bound);
+    EXPECT_LT(r.cad_summary.max_abs(), 0.010);
     EXPECT_GE(r.coverage_2u, 0.95);
   }
 }
