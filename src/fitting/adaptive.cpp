@@ -223,17 +223,18 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
   std::optional<AdaptiveFitResult> unpolished;
   const bool polish_allowed = options.directional_smoothing && options.fit.anisotropic &&
                               !options.fit.log10_anisotropy && !options.fit.log10_smoothing && !options.fit.lambda;
-  auto start_polishing = [&](const AdaptiveFitResult& last) {  // `last` completed as a final result
+  auto may_polish = [&](const AdaptiveFitResult& r) { return polish_allowed && r.noise_sigma > options.noise_floor; };
+  auto start_polishing = [&](AdaptiveFitResult last) {  // `last` completed as a final result
     polishing = true;
-    unpolished = last;
-    unpolished->thin_misfit_seen = thin_misfit_seen;
     fit_options.log10_anisotropy = last.log10_anisotropy;
     fit_options.lambda = last.lambda;
     fit_options.directional_smoothing = true;
+    unpolished = std::move(last);
+    unpolished->thin_misfit_seen = thin_misfit_seen;
   };
-  // The kept round's net, penalty weights and options (taken with `kept`): where a refinement tried is undone and
-  // the kept net explains the data, that net is polished as any final net is (see below), not returned unpolished
-  // (scan lines, D1102: 1.271 µm polished, 1.381 not).
+  // The kept round's net, penalty weights and options, taken with `kept` where it explains the data and may be
+  // polished: where a refinement tried is undone, that net is polished as any final net is (see below), not
+  // returned unpolished (scan lines, D1102: 1.271 µm polished, 1.381 not).
   struct KeptNet {
     Surface target;
     std::optional<HierarchicalBasis> basis;
@@ -242,10 +243,7 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
   };
   std::optional<KeptNet> kept_net;
   auto polish_kept = [&] {
-    if (!kept_net || kept->status != AdaptiveFitResult::Status::OK || !polish_allowed ||
-        !(kept->noise_sigma > options.noise_floor)) {
-      return false;
-    }
+    if (!kept_net) return false;
     target = std::move(kept_net->target);
     basis = std::move(kept_net->basis);
     span_weight = std::move(kept_net->span_weight);
@@ -254,7 +252,7 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
     t = kept->params;
     trying = false;
     result = *kept;
-    start_polishing(*kept);
+    start_polishing(std::move(*kept));
     return true;
   };
   for (int round = 0;; ++round) {
@@ -536,19 +534,23 @@ AdaptiveFitResult refine_from(const Surface& start, std::span<const Point3> poin
       // against its misfit, and moving it changes which readings are outliers (S11, a crease the net does not
       // follow: 0.672 -> 0.926 µm); nor while a refinement is on trial, whose score is compared with the kept
       // round's; nor where θ or λ were given.
-      if (polish_allowed && !trying && result.noise_sigma > options.noise_floor) {
+      if (!trying && may_polish(result)) {
         AdaptiveFitResult last = result;
         complete(last, AdaptiveFitResult::Status::OK);
-        start_polishing(last);
+        start_polishing(std::move(last));
         continue;
       }
       return finish(AdaptiveFitResult::Status::OK);
     }
     if (round == options.max_rounds) return finish(AdaptiveFitResult::Status::NoiseNotReached);
     if (trying || trial) {
-      kept_net = KeptNet{target, basis, span_weight, fit_options};
       kept = result;
       complete(*kept, status_now);
+      if (kept->status == AdaptiveFitResult::Status::OK && may_polish(*kept)) {
+        kept_net = KeptNet{target, basis, span_weight, fit_options};
+      } else {
+        kept_net.reset();
+      }
       kept->refinement_rejected = status_now != AdaptiveFitResult::Status::OK;
       kept_cv = fit.cv_score;
       kept_rss = fit.rss;
